@@ -1,0 +1,295 @@
+//! Additive-noise unscented Kalman filter of fixed size.
+
+use nalgebra::{SMatrix, SVector};
+
+use super::{ChannelDiag, Gate, SigmaParams, SigmaWeights};
+use crate::math::{cholesky, cholesky_solve_right, symmetrize, wrap_pi, LinalgError, Real};
+
+/// Why a UKF step did not complete normally.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum UkfError<E> {
+    /// The process or measurement function refused a sigma point; the filter
+    /// is unchanged.
+    Model(E),
+    /// The state covariance lost positive definiteness. Recovery was applied:
+    /// the covariance was re-initialised to the reset matrix and the step was
+    /// completed with it. Counted in [`Ukf::covariance_resets`].
+    CovarianceReset(LinalgError),
+    /// The innovation covariance was not positive definite; the update was
+    /// skipped and the filter is unchanged.
+    InnovationCovariance(LinalgError),
+    /// The result contained NaN or infinity; the filter is unchanged.
+    NonFinite,
+}
+
+/// What an update produced.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UpdateOutput<T, const N: usize, const M: usize> {
+    /// One diagnostic record per measurement channel.
+    pub diag: [ChannelDiag<T>; M],
+    /// The gain that was applied (zero columns for channels not fused).
+    pub gain: SMatrix<T, N, M>,
+    /// Set when `P` had to be re-initialised before this update (the update
+    /// was then done with the reset covariance).
+    pub covariance_reset: Option<LinalgError>,
+}
+
+/// An unscented Kalman filter with `N` states and `S = 2N + 1` sigma points.
+///
+/// The process and measurement functions are passed to each call, so one
+/// filter type serves the vehicle model, reference models in tests and the
+/// augmented filters. Angle components (flagged at construction) use circular
+/// means — the weighted mean of wrapped differences to the first sigma point —
+/// and wrapped residuals. Sigma points for the update are redrawn from the
+/// predicted mean and covariance ([OTS] eq. (23)).
+///
+/// Covariance health: after every step `P` is symmetrised and its diagonal
+/// floored at `min_variance`; a failed Cholesky factorisation re-initialises
+/// `P` (see [`UkfError::CovarianceReset`]).
+#[derive(Debug, Clone)]
+pub struct Ukf<T, const N: usize, const S: usize> {
+    x: SVector<T, N>,
+    p: SMatrix<T, N, N>,
+    p_reset: SMatrix<T, N, N>,
+    min_variance: SVector<T, N>,
+    weights: SigmaWeights<T, S>,
+    angles: [bool; N],
+    resets: u32,
+}
+
+fn diff<T: Real, const K: usize>(a: &SVector<T, K>, b: &SVector<T, K>, angles: &[bool; K]) -> SVector<T, K> {
+    let mut d = a - b;
+    for (v, is_angle) in d.iter_mut().zip(angles.iter()) {
+        if *is_angle {
+            *v = wrap_pi(*v);
+        }
+    }
+    d
+}
+
+fn weighted_mean<T: Real, const K: usize, const S: usize>(
+    pts: &[SVector<T, K>; S],
+    wm: &[T; S],
+    angles: &[bool; K],
+) -> SVector<T, K> {
+    let Some(reference) = pts.first() else {
+        return SVector::zeros();
+    };
+    let mut acc = SVector::<T, K>::zeros();
+    for (pt, w) in pts.iter().zip(wm.iter()) {
+        acc += diff(pt, reference, angles) * *w;
+    }
+    let mut mean = reference + acc;
+    for (v, is_angle) in mean.iter_mut().zip(angles.iter()) {
+        if *is_angle {
+            *v = wrap_pi(*v);
+        }
+    }
+    mean
+}
+
+impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
+    /// A filter at `x0` with covariance `p0`, which is also the matrix `P`
+    /// is reset to after a numerical failure. Returns `None` when the sigma
+    /// parameters are unusable.
+    pub fn new(x0: SVector<T, N>, p0: SMatrix<T, N, N>, params: &SigmaParams, angles: [bool; N]) -> Option<Self> {
+        const { assert!(S == 2 * N + 1, "S must be 2N + 1") };
+        let weights = SigmaWeights::new(params)?;
+        Some(Self {
+            x: x0,
+            p: p0,
+            p_reset: p0,
+            min_variance: SVector::repeat(T::lit(1e-12)),
+            weights,
+            angles,
+            resets: 0,
+        })
+    }
+
+    /// The state estimate.
+    pub fn state(&self) -> &SVector<T, N> {
+        &self.x
+    }
+    /// The state covariance.
+    pub fn covariance(&self) -> &SMatrix<T, N, N> {
+        &self.p
+    }
+    /// Number of covariance re-initialisations since start.
+    pub fn covariance_resets(&self) -> u32 {
+        self.resets
+    }
+    /// Sets the per-state variance floor applied after every step.
+    pub fn set_min_variance(&mut self, v: SVector<T, N>) {
+        self.min_variance = v;
+    }
+    /// Sets the covariance that a numerical failure resets to.
+    pub fn set_reset_covariance(&mut self, p: SMatrix<T, N, N>) {
+        self.p_reset = p;
+    }
+    /// Overwrites state and covariance (re-alignment, tests).
+    pub fn reset(&mut self, x: SVector<T, N>, p: SMatrix<T, N, N>) {
+        self.x = x;
+        self.p = p;
+    }
+
+    fn sigma_points(&self, l: &SMatrix<T, N, N>) -> [SVector<T, N>; S] {
+        let mut pts = [self.x; S];
+        for (k, col) in l.column_iter().enumerate() {
+            let off = col * self.weights.gamma;
+            if let Some(p) = pts.get_mut(1 + k) {
+                *p += off;
+            }
+            if let Some(p) = pts.get_mut(1 + N + k) {
+                *p -= off;
+            }
+        }
+        pts
+    }
+
+    /// Factorises `P`, re-initialising it once if that fails.
+    fn factor(&mut self) -> (SMatrix<T, N, N>, Option<LinalgError>) {
+        match cholesky(&self.p) {
+            Ok(l) => (l, None),
+            Err(e) => {
+                self.p = self.p_reset;
+                self.resets = self.resets.saturating_add(1);
+                // The reset matrix is a configuration value checked at start-up;
+                // should it fail too, fall back to its diagonal.
+                let l = cholesky(&self.p).unwrap_or_else(|_| {
+                    let mut d = SMatrix::<T, N, N>::zeros();
+                    for i in 0..N {
+                        d[(i, i)] = self.p_reset[(i, i)].abs().sqrt_fast();
+                    }
+                    d
+                });
+                (l, Some(e))
+            }
+        }
+    }
+
+    fn condition(&mut self) {
+        symmetrize(&mut self.p);
+        for i in 0..N {
+            let floor = self.min_variance[i];
+            if self.p[(i, i)] < floor {
+                self.p[(i, i)] = floor;
+            }
+        }
+    }
+
+    /// Time update through `f` with additive process noise `q`.
+    pub fn predict<E>(
+        &mut self,
+        mut f: impl FnMut(&SVector<T, N>) -> Result<SVector<T, N>, E>,
+        q: &SMatrix<T, N, N>,
+    ) -> Result<(), UkfError<E>> {
+        let (l, failure) = self.factor();
+        let chi = self.sigma_points(&l);
+        let mut y = chi;
+        for (out, pt) in y.iter_mut().zip(chi.iter()) {
+            *out = f(pt).map_err(UkfError::Model)?;
+        }
+        let mean = weighted_mean(&y, &self.weights.wm, &self.angles);
+        let mut p = *q;
+        for (pt, w) in y.iter().zip(self.weights.wc.iter()) {
+            let d = diff(pt, &mean, &self.angles);
+            p += d * d.transpose() * *w;
+        }
+        if !(mean.iter().all(|v| v.finite()) && p.iter().all(|v| v.finite())) {
+            return Err(UkfError::NonFinite);
+        }
+        self.x = mean;
+        self.p = p;
+        self.condition();
+        match failure {
+            Some(e) => Err(UkfError::CovarianceReset(e)),
+            None => Ok(()),
+        }
+    }
+
+    /// Measurement update with the channels flagged in `available`.
+    ///
+    /// `h` maps a state to the full `M`-channel prediction, `r` is the
+    /// diagonal measurement noise, `meas_angles` flags angle channels and
+    /// `gate` decides which available channels are fused. Channels not fused
+    /// still get their innovation and variance in the diagnostic record.
+    #[allow(clippy::too_many_arguments)]
+    pub fn update<const M: usize, E>(
+        &mut self,
+        z: &SVector<T, M>,
+        available: &[bool; M],
+        mut h: impl FnMut(&SVector<T, N>) -> Result<SVector<T, M>, E>,
+        r: &SVector<T, M>,
+        meas_angles: &[bool; M],
+        gate: &mut Gate<T, M>,
+    ) -> Result<UpdateOutput<T, N, M>, UkfError<E>> {
+        let (l, failure) = self.factor();
+        let chi = self.sigma_points(&l);
+        let mut zs = [SVector::<T, M>::zeros(); S];
+        for (out, pt) in zs.iter_mut().zip(chi.iter()) {
+            *out = h(pt).map_err(UkfError::Model)?;
+        }
+        let z_hat = weighted_mean(&zs, &self.weights.wm, meas_angles);
+        let mut pzz = SMatrix::<T, M, M>::from_diagonal(r);
+        let mut pxz = SMatrix::<T, N, M>::zeros();
+        for ((zp, xp), w) in zs.iter().zip(chi.iter()).zip(self.weights.wc.iter()) {
+            let dz = diff(zp, &z_hat, meas_angles);
+            let dx = diff(xp, &self.x, &self.angles);
+            pzz += dz * dz.transpose() * *w;
+            pxz += dx * dz.transpose() * *w;
+        }
+        let nu_all = diff(z, &z_hat, meas_angles);
+        let mut diag = [ChannelDiag::<T>::default(); M];
+        let mut nu = SVector::<T, M>::zeros();
+        for (i, d) in diag.iter_mut().enumerate() {
+            if !available.get(i).copied().unwrap_or(false) {
+                continue;
+            }
+            let s = pzz[(i, i)];
+            let innovation = nu_all[i];
+            let ratio = gate.ratio(innovation, s);
+            let fused = innovation.finite() && s > T::zero() && gate.admit(i, ratio);
+            *d = ChannelDiag {
+                available: true,
+                innovation,
+                variance: s,
+                test_ratio: ratio,
+                fused,
+            };
+            if fused {
+                nu[i] = innovation;
+            }
+        }
+        // Channels not fused: decouple them (unit variance, no cross terms,
+        // zero residual) so that the fixed-size gain has zero columns there.
+        for (i, d) in diag.iter().enumerate() {
+            if !d.fused {
+                pzz.set_row(i, &nalgebra::SMatrix::<T, 1, M>::zeros());
+                pzz.set_column(i, &SVector::<T, M>::zeros());
+                pzz[(i, i)] = T::one();
+                pxz.set_column(i, &SVector::<T, N>::zeros());
+            }
+        }
+        let lzz = cholesky(&pzz).map_err(UkfError::InnovationCovariance)?;
+        let gain = cholesky_solve_right(&lzz, &pxz);
+        let mut x = self.x + gain * nu;
+        for (v, is_angle) in x.iter_mut().zip(self.angles.iter()) {
+            if *is_angle {
+                *v = wrap_pi(*v);
+            }
+        }
+        let p = self.p - gain * pzz * gain.transpose();
+        if !(x.iter().all(|v| v.finite()) && p.iter().all(|v| v.finite())) {
+            return Err(UkfError::NonFinite);
+        }
+        self.x = x;
+        self.p = p;
+        self.condition();
+        Ok(UpdateOutput {
+            diag,
+            gain,
+            covariance_reset: failure,
+        })
+    }
+}

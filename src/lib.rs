@@ -1,0 +1,38 @@
+//! # imu-fdi
+//!
+//! `no_std`, allocation-free fault detection, isolation and estimation for
+//! inertial measurement units, for flight controllers and underwater vehicles.
+//!
+//! Every IMU period the monitor says whether each channel
+//! `[a_x, a_y, a_z, p, q, r]` is faulty, with which sign, how large the fault
+//! is and what the corrected reading is. This release implements the UKF
+//! innovation monitor ([`monitor::UkfMonitor`]): a 6-state unscented Kalman
+//! filter on the vehicle's body velocity and attitude, fed by the IMU and
+//! aided by DVL + compass (AUV) or GNSS velocity + attitude (aircraft), with
+//! windowed t-tests on the innovations, decoupling-matrix and GLR isolation,
+//! and fault estimation.
+//!
+//! ```
+//! use imu_fdi::model::{ImuVec, Measurement, MeasVec};
+//! use imu_fdi::monitor::{UkfMonitor, UkfMonitorConfig, Phase};
+//!
+//! let mut monitor = UkfMonitor::<f32>::new(UkfMonitorConfig::auv()).unwrap();
+//! // A level AUV at rest: specific force (0, 0, −g), no rotation.
+//! let imu = ImuVec::new(0.0, 0.0, -9.806_65, 0.0, 0.0, 0.0);
+//! let aiding = Measurement { z: MeasVec::zeros(), available: [true; 6] };
+//! let report = monitor.step(&imu, 0.01, &aiding);
+//! assert_eq!(report.phase, Phase::Converging);
+//! ```
+//!
+//! Crate layout: [`math`] (scalar trait, trig, Cholesky), [`model`] (vehicle
+//! dynamics, measurement models, process noise), [`filter`] (UKF),
+//! [`detect`] (windows, t-test, decoupling, GLR, estimators), [`stats`]
+//! (Student-t quantile), [`monitor`] (the composed periodic monitor).
+#![cfg_attr(not(test), no_std)]
+
+pub mod detect;
+pub mod filter;
+pub mod math;
+pub mod model;
+pub mod monitor;
+pub mod stats;

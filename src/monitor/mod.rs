@@ -1,0 +1,10 @@
+//! The UKF innovation monitor: filter, closed-loop fault signatures, start-up
+//! learning, drift tracking, detection and estimation in one periodic `step`.
+
+mod config;
+mod report;
+mod ukf_monitor;
+
+pub use config::{ConfigError, UkfMonitorConfig};
+pub use report::{ChannelState, Health, Phase, Report};
+pub use ukf_monitor::{UkfMonitor, DEFAULT_WINDOW};

@@ -1,0 +1,524 @@
+use nalgebra::Vector3;
+
+use super::{ChannelState, ConfigError, Health, Phase, Report, UkfMonitorConfig};
+use crate::detect::{
+    decouple_flags, estimate_as_written, estimate_corrected, glr_isolate, paper_matrix, runtime_sign_matrix, t_statistic,
+    Detector, InnovationWindow, Persistence, Statistic, TTest, PAPER_MATRIX_AS_PRINTED, PAPER_MATRIX_CORRECTED,
+};
+use crate::filter::{ChannelDiag, Gate, Ukf, UkfError};
+use crate::math::Real;
+use crate::model::{
+    discrete_process_noise, AidingKind, ImuVec, Mat6, Measurement, MeasurementModel, ModelError, StateVec, VehicleModel,
+    NX, NZ, PITCH, ROLL, STATE_ANGLES, YAW,
+};
+
+/// Default window length (aiding epochs per t-test window).
+pub const DEFAULT_WINDOW: usize = 10;
+
+const MEAS_ANGLES: [bool; NZ] = [false, false, false, true, true, true];
+/// Largest nominal bias the learner may assume, as a multiple of `min_fault`:
+/// anything larger is a fault from power-on, not a nominal error.
+const MAX_NOMINAL_BIAS_FACTOR: f64 = 20.0;
+
+/// The UKF innovation monitor ([UKF], SPEC §4–6, §8a) for one IMU.
+///
+/// Call [`step`](Self::step) once per IMU period with the measured `dt` and
+/// whatever aiding arrived in that period. `W` is the t-test window length in
+/// aiding epochs.
+///
+/// Per step: input checks → nominal-bias compensation → UKF predict (and the
+/// closed-loop fault sensitivity `X = ∂x̂/∂f`) → UKF update with gating →
+/// innovation windows → t-tests → decision rule → debounce → estimates.
+/// The sensitivity recursion (`X ← ΦX + B·dt` per step, `X ← (I − KH)X` per
+/// update) yields each innovation channel's signature row `m_i = −H_i X⁻`:
+/// the run-time form of SPEC §5's `M = H (I − Φ(I − KH))⁻¹ G_f`, valid for
+/// any aiding rate and subset.
+#[derive(Debug, Clone)]
+pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
+    cfg: UkfMonitorConfig<T>,
+    model: VehicleModel<T>,
+    meas: MeasurementModel<T>,
+    ukf: Ukf<T, NX, 13>,
+    gate: Gate<T, NZ>,
+    ttest: TTest<T>,
+    windows: [InnovationWindow<T, W>; NZ],
+    since_seen: [T; NZ],
+    sensitivity: Mat6<T>,
+    signature: Mat6<T>,
+    latest_innovation: ImuVec<T>,
+    latest_variance: ImuVec<T>,
+    nominal_bias: ImuVec<T>,
+    learn_clock: T,
+    persistence: Persistence<NZ>,
+    paper_inv: Option<Mat6<T>>,
+    phase: Phase,
+    phase_time: T,
+    prev_imu: ImuVec<T>,
+    frozen_count: u16,
+    saturation_holdoff: T,
+    last_input_b: Mat6<T>,
+    last_h: Mat6<T>,
+    last_dt: T,
+    report: Report<T>,
+}
+
+impl<T: Real, const W: usize> UkfMonitor<T, W> {
+    /// A monitor waiting for its first attitude measurement.
+    pub fn new(cfg: UkfMonitorConfig<T>) -> Result<Self, ConfigError> {
+        cfg.validate()?;
+        let ttest = TTest::new(cfg.alpha, W).map_err(|_| ConfigError::TTest)?;
+        let p0 = Mat6::from_diagonal(&cfg.initial_sigma.component_mul(&cfg.initial_sigma));
+        let ukf = Ukf::new(StateVec::zeros(), p0, &cfg.sigma, STATE_ANGLES).ok_or(ConfigError::SigmaParams)?;
+        let mut meas = MeasurementModel::new(cfg.aiding);
+        meas.lever_arm = Vector3::new(cfg.lever_arm[0], cfg.lever_arm[1], cfg.lever_arm[2]);
+        let paper_inv = match cfg.detector {
+            Detector::PaperMatrix => paper_matrix::<T>(&PAPER_MATRIX_CORRECTED).try_inverse(),
+            Detector::PaperMatrixAsPrinted => paper_matrix::<T>(&PAPER_MATRIX_AS_PRINTED).try_inverse(),
+            _ => None,
+        };
+        let mut ukf = ukf;
+        ukf.set_min_variance(StateVec::from_element(T::lit(1e-14)));
+        Ok(Self {
+            model: VehicleModel {
+                gravity: cfg.gravity,
+                cos_pitch_min: cfg.cos_pitch_min,
+            },
+            meas,
+            ukf,
+            gate: Gate::new(cfg.gate_sigma, cfg.gate_max_rejections),
+            ttest,
+            windows: core::array::from_fn(|_| InnovationWindow::new()),
+            since_seen: [T::lit(1e9); NZ],
+            sensitivity: Mat6::zeros(),
+            signature: Mat6::zeros(),
+            latest_innovation: ImuVec::zeros(),
+            latest_variance: ImuVec::from_element(T::one()),
+            nominal_bias: ImuVec::zeros(),
+            learn_clock: T::zero(),
+            persistence: Persistence::new(cfg.persistence),
+            paper_inv,
+            phase: Phase::Aligning,
+            phase_time: T::zero(),
+            prev_imu: ImuVec::zeros(),
+            frozen_count: 0,
+            saturation_holdoff: T::zero(),
+            last_input_b: Mat6::identity(),
+            last_h: Mat6::identity(),
+            last_dt: cfg.imu_period,
+            report: Report::default(),
+            cfg,
+        })
+    }
+
+    /// The configuration in use.
+    pub fn config(&self) -> &UkfMonitorConfig<T> {
+        &self.cfg
+    }
+    /// The life-cycle phase.
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+    /// The t-test critical value in use.
+    pub fn t_threshold(&self) -> T {
+        self.ttest.threshold
+    }
+    /// The current closed-loop signature matrix `M` (rows innovations,
+    /// columns faults; raw units).
+    pub fn signature(&self) -> &Mat6<T> {
+        &self.signature
+    }
+    /// The underlying filter.
+    pub fn filter(&self) -> &Ukf<T, NX, 13> {
+        &self.ukf
+    }
+    /// Clears latched fault decisions (explicit operator reset).
+    pub fn reset_faults(&mut self) {
+        self.persistence.reset();
+    }
+
+    /// One monitor period. Never panics; every anomaly is reported in
+    /// [`Report::health`].
+    pub fn step(&mut self, imu: &ImuVec<T>, dt: T, aiding: &Measurement<T>) -> Report<T> {
+        let mut health = Health::default();
+        let mut updated = false;
+
+        // --- input checks -------------------------------------------------
+        let period = self.cfg.imu_period;
+        let dt_ok = dt.finite() && dt > T::zero();
+        let max_dt = period * T::lit(5.0);
+        let dt_use = if !dt_ok {
+            health.dt_out_of_range = true;
+            None
+        } else if dt > max_dt {
+            health.dt_out_of_range = true;
+            Some(max_dt)
+        } else {
+            Some(dt)
+        };
+        let in_range = imu
+            .iter()
+            .zip(self.cfg.full_scale.iter())
+            .all(|(v, fs)| v.finite() && v.abs() <= *fs * T::lit(1.5));
+        health.input_invalid = !in_range;
+        if in_range {
+            if *imu == self.prev_imu {
+                self.frozen_count = self.frozen_count.saturating_add(1);
+            } else {
+                self.frozen_count = 0;
+            }
+            self.prev_imu = *imu;
+        }
+        health.frozen = self.frozen_count >= self.cfg.frozen_samples;
+        let saturated = in_range
+            && imu
+                .iter()
+                .zip(self.cfg.full_scale.iter())
+                .any(|(v, fs)| v.abs() >= *fs * T::lit(0.98));
+        if saturated {
+            self.saturation_holdoff = T::lit(0.5);
+        }
+        health.saturated = saturated;
+        let elapsed = dt_use.unwrap_or(T::zero());
+        self.saturation_holdoff = (self.saturation_holdoff - elapsed).max(T::zero());
+        for s in self.since_seen.iter_mut() {
+            *s += elapsed;
+        }
+
+        // --- alignment ----------------------------------------------------
+        if self.phase == Phase::Aligning {
+            self.try_align(aiding, imu);
+            self.report = self.compose(imu, health, false);
+            return self.report;
+        }
+
+        // --- prediction ---------------------------------------------------
+        let usable = in_range && !health.frozen;
+        if let (Some(dt), true) = (dt_use, usable) {
+            let u = imu - self.nominal_bias;
+            match self.predict(&u, dt) {
+                Ok(reset) => health.covariance_reset |= reset,
+                Err(ModelError::PitchSingularity) => health.pitch_singular = true,
+                Err(ModelError::NonFinite) => health.input_invalid = true,
+            }
+            self.phase_time += dt;
+            self.last_dt = dt;
+        }
+
+        // --- measurement update --------------------------------------------
+        let meas_ok = aiding.any();
+        if meas_ok && !health.pitch_singular {
+            let omega = Vector3::new(imu[3], imu[4], imu[5]) - Vector3::new(self.nominal_bias[3], self.nominal_bias[4], self.nominal_bias[5]);
+            match self.update(aiding, &omega) {
+                Ok((rejected, reset)) => {
+                    updated = true;
+                    health.aiding_rejected = rejected;
+                    health.covariance_reset |= reset;
+                }
+                Err(_) => health.covariance_reset = true,
+            }
+        }
+        for (w, s) in self.windows.iter_mut().zip(self.since_seen.iter()) {
+            if *s > self.cfg.aiding_timeout_s {
+                w.clear();
+            }
+        }
+
+        // --- learning, drift tracking, detection ----------------------------
+        if updated {
+            self.after_update(&health);
+        }
+        self.advance_phase();
+        self.report = self.compose(imu, health, updated);
+        self.report
+    }
+
+    fn try_align(&mut self, aiding: &Measurement<T>, imu: &ImuVec<T>) {
+        let att = aiding.available.get(ROLL..=YAW).is_some_and(|a| a.iter().all(|v| *v));
+        if !att || !aiding.z.iter().skip(ROLL).all(|v| v.finite()) {
+            return;
+        }
+        let mut x = StateVec::zeros();
+        x[ROLL] = aiding.z[ROLL];
+        x[PITCH] = aiding.z[PITCH];
+        x[YAW] = aiding.z[YAW];
+        if self.model.check_attitude(&x).is_err() {
+            return;
+        }
+        let vel = aiding.available.iter().take(3).all(|v| *v) && aiding.z.iter().take(3).all(|v| v.finite());
+        if vel {
+            let v = Vector3::new(aiding.z[0], aiding.z[1], aiding.z[2]);
+            let omega = Vector3::new(imu[3], imu[4], imu[5]);
+            let v_sensor_body = match self.cfg.aiding {
+                AidingKind::DvlCompass => v,
+                AidingKind::GnssAttitude => {
+                    // Rotate NED → body with the measured attitude.
+                    let h = MeasurementModel::<T>::new(AidingKind::GnssAttitude);
+                    let mut xb = x;
+                    let mut out = Vector3::zeros();
+                    for k in 0..3 {
+                        xb[0] = if k == 0 { T::one() } else { T::zero() };
+                        xb[1] = if k == 1 { T::one() } else { T::zero() };
+                        xb[2] = if k == 2 { T::one() } else { T::zero() };
+                        let col = h.predict(&xb, &Vector3::zeros());
+                        // Column k of R_nb; body component k = (R_nb e_k) · v.
+                        out[k] = col[0] * v[0] + col[1] * v[1] + col[2] * v[2];
+                    }
+                    out
+                }
+            };
+            let v_imu = v_sensor_body - omega.cross(&self.meas.lever_arm);
+            x[0] = v_imu[0];
+            x[1] = v_imu[1];
+            x[2] = v_imu[2];
+        }
+        let s = self.cfg.initial_sigma;
+        self.ukf.reset(x, Mat6::from_diagonal(&s.component_mul(&s)));
+        self.sensitivity = Mat6::zeros();
+        self.phase = Phase::Converging;
+        self.phase_time = T::zero();
+    }
+
+    fn predict(&mut self, u: &ImuVec<T>, dt: T) -> Result<bool, ModelError> {
+        let x = *self.ukf.state();
+        let q = discrete_process_noise(&self.model, &x, u, &self.cfg.process_noise, dt)?;
+        let phi = self.model.transition(&x, u, dt)?;
+        let b = self.model.jacobian_input(&x)?;
+        let model = self.model;
+        let reset = match self.ukf.predict(|s| model.step(s, u, dt), &q) {
+            Ok(()) => false,
+            Err(UkfError::CovarianceReset(_)) => true,
+            Err(UkfError::Model(e)) => return Err(e),
+            Err(_) => return Err(ModelError::NonFinite),
+        };
+        self.sensitivity = phi * self.sensitivity + b * dt;
+        self.last_input_b = b;
+        Ok(reset)
+    }
+
+    fn update(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>) -> Result<(bool, bool), UkfError<ModelError>> {
+        let x_prior = *self.ukf.state();
+        let h = self.meas.jacobian(&x_prior, omega);
+        let r = self.cfg.meas_sigma.component_mul(&self.cfg.meas_sigma);
+        let meas = self.meas;
+        let mut available = aiding.available;
+        for (a, z) in available.iter_mut().zip(aiding.z.iter()) {
+            *a = *a && z.finite();
+        }
+        let out = self
+            .ukf
+            .update(&aiding.z, &available, |s| Ok(meas.predict(s, omega)), &r, &MEAS_ANGLES, &mut self.gate)?;
+        let hx = h * self.sensitivity;
+        let record = self.saturation_holdoff <= T::zero();
+        let mut rejected = false;
+        for (i, d) in out.diag.iter().enumerate() {
+            if !d.available {
+                continue;
+            }
+            rejected |= !d.fused;
+            if let Some(s) = self.since_seen.get_mut(i) {
+                *s = T::zero();
+            }
+            let row = -hx.row(i);
+            self.signature.set_row(i, &row);
+            self.latest_innovation[i] = d.innovation;
+            self.latest_variance[i] = d.variance;
+            if record && d.fused {
+                let v = match self.cfg.statistic {
+                    Statistic::Raw => d.innovation,
+                    Statistic::Whitened => d.innovation / d.variance.sqrt_fast(),
+                };
+                if let Some(w) = self.windows.get_mut(i) {
+                    w.push(v);
+                }
+            }
+        }
+        self.report.diag = out.diag;
+        self.sensitivity = (Mat6::identity() - out.gain * h) * self.sensitivity;
+        self.last_h = h;
+        Ok((rejected, out.covariance_reset.is_some()))
+    }
+
+    /// Row scale that turns a raw innovation into a window sample.
+    fn window_scale(&self) -> ImuVec<T> {
+        match self.cfg.statistic {
+            Statistic::Raw => ImuVec::from_element(T::one()),
+            Statistic::Whitened => self.latest_variance.map(|v| T::one() / v.sqrt_fast()),
+        }
+    }
+
+    fn after_update(&mut self, health: &Health) {
+        let dt_learn = self.phase_time - self.learn_clock;
+        self.learn_clock = self.phase_time;
+        let w_inst = self.latest_variance.map(|v| T::one() / v);
+        let instant = estimate_corrected(&self.signature, &w_inst, &self.latest_innovation);
+        match self.phase {
+            Phase::Learning => {
+                if let Some(f) = instant {
+                    let k = (dt_learn / self.cfg.learn_tau_s).min(T::one());
+                    self.nominal_bias += f * k;
+                }
+            }
+            Phase::Monitoring => {
+                self.detect(health);
+                let quiet = self.report.status.iter().all(|s| !matches!(s, ChannelState::FaultNegative | ChannelState::FaultPositive))
+                    && self
+                        .report
+                        .t_statistic
+                        .iter()
+                        .all(|t| t.abs() < self.ttest.threshold * T::lit(0.5));
+                if let (true, Some(f)) = (quiet, instant) {
+                    let k = dt_learn / self.cfg.drift_tau_s;
+                    for ((b, df), lim) in self.nominal_bias.iter_mut().zip(f.iter()).zip(self.cfg.drift_rate_limit.iter()) {
+                        let step = *df * k;
+                        let cap = *lim * dt_learn;
+                        *b += step.max(-cap).min(cap);
+                    }
+                }
+            }
+            _ => {}
+        }
+        let cap = T::lit(MAX_NOMINAL_BIAS_FACTOR);
+        for (b, m) in self.nominal_bias.iter_mut().zip(self.cfg.min_fault.iter()) {
+            *b = b.max(-*m * cap).min(*m * cap);
+        }
+    }
+
+    fn detect(&mut self, _health: &Health) {
+        let mut flags = [0i8; NZ];
+        let mut tstat = [T::zero(); NZ];
+        let mut rbar = ImuVec::<T>::zeros();
+        let mut weight = ImuVec::<T>::zeros();
+        let mut full = [false; NZ];
+        for (i, w) in self.windows.iter().enumerate() {
+            if !w.is_full() {
+                continue;
+            }
+            let Some(s) = w.stats() else { continue };
+            let t = t_statistic(&s);
+            full[i] = true;
+            tstat[i] = t;
+            flags[i] = self.ttest.flag(t);
+            rbar[i] = s.mean;
+            let var_mean = s.std * s.std / T::lit(s.n as f64);
+            weight[i] = if var_mean > T::zero() { T::one() / var_mean } else { T::zero() };
+        }
+        let scale = self.window_scale();
+        let mut m_eff = self.signature;
+        for (i, s) in scale.iter().enumerate() {
+            let row = m_eff.row(i) * *s;
+            m_eff.set_row(i, &row);
+        }
+        let decision = match self.cfg.detector {
+            Detector::Threshold => {
+                let mut d = [0i8; NZ];
+                for (j, dj) in d.iter_mut().enumerate() {
+                    let mjj = m_eff[(j, j)];
+                    if flags[j] != 0 && mjj != T::zero() {
+                        let f = rbar[j] / mjj;
+                        if f.abs() > self.cfg.min_fault[j] * T::lit(0.5) {
+                            *dj = if f > T::zero() { 1 } else { -1 };
+                        }
+                    }
+                }
+                d
+            }
+            Detector::PaperMatrix | Detector::PaperMatrixAsPrinted => match self.paper_inv {
+                Some(ci) => decouple_flags(&ci, &flags).0,
+                None => [0; NZ],
+            },
+            Detector::RuntimeMatrix => {
+                let sigma = weight.map(|w| if w > T::zero() { T::one() / w.sqrt_fast() } else { T::zero() });
+                let c = runtime_sign_matrix(&m_eff, &self.cfg.min_fault, &sigma, self.cfg.sign_deadband);
+                match c.try_inverse() {
+                    Some(ci) => decouple_flags(&ci, &flags).0,
+                    None => [0; NZ],
+                }
+            }
+            Detector::RuntimeMatrixGlr => {
+                if flags.iter().any(|f| *f != 0) {
+                    glr_isolate(&m_eff, &rbar, &weight, self.cfg.glr_threshold, 3).signs
+                } else {
+                    [0; NZ]
+                }
+            }
+        };
+        let monitored = self.monitored(&full);
+        let mut masked = decision;
+        for (d, m) in masked.iter_mut().zip(monitored.iter()) {
+            if !*m {
+                *d = 0;
+            }
+        }
+        let out = self.persistence.update(&masked);
+        // Estimates from the window means.
+        let est = estimate_corrected(&m_eff, &weight, &rbar).unwrap_or_else(ImuVec::zeros);
+        let raw_mean = rbar.component_div(&scale.map(|s| if s > T::zero() { s } else { T::one() }));
+        let as_written = estimate_as_written(&self.last_h, &self.last_input_b, self.last_dt, &raw_mean).unwrap_or_else(ImuVec::zeros);
+        for (i, st) in self.report.status.iter_mut().enumerate() {
+            *st = if !monitored[i] {
+                ChannelState::NotMonitored
+            } else {
+                match out[i] {
+                    1 => ChannelState::FaultPositive,
+                    -1 => ChannelState::FaultNegative,
+                    _ => ChannelState::Healthy,
+                }
+            };
+        }
+        self.report.t_statistic = tstat;
+        self.report.innovation_flags = flags;
+        self.report.fault_estimate = est;
+        self.report.fault_estimate_as_written = as_written;
+    }
+
+    /// IMU channel j is monitored when the innovation channels carrying its
+    /// signature have full windows: the velocity triad for accelerometers,
+    /// the attitude triad for gyros.
+    fn monitored(&self, full: &[bool; NZ]) -> [bool; NZ] {
+        let vel = full.iter().take(3).all(|f| *f);
+        let att = full.iter().skip(3).all(|f| *f);
+        [vel, vel, vel, att, att, att]
+    }
+
+    fn advance_phase(&mut self) {
+        match self.phase {
+            Phase::Converging if self.phase_time >= self.cfg.converge_s => {
+                self.phase = Phase::Learning;
+                self.learn_clock = self.phase_time;
+            }
+            Phase::Learning if self.phase_time >= self.cfg.converge_s + self.cfg.learn_s => {
+                self.phase = Phase::Monitoring;
+                for w in self.windows.iter_mut() {
+                    w.clear();
+                }
+                self.persistence.reset();
+            }
+            _ => {}
+        }
+    }
+
+    fn compose(&self, imu: &ImuVec<T>, health: Health, updated: bool) -> Report<T> {
+        let mut r = self.report;
+        r.phase = self.phase;
+        if self.phase != Phase::Monitoring {
+            r.status = [ChannelState::NotMonitored; NZ];
+        }
+        r.health = health;
+        r.updated = updated;
+        r.state = *self.ukf.state();
+        r.state_sigma = self.ukf.covariance().diagonal().map(|v| v.max(T::zero()).sqrt_fast());
+        r.nominal_bias = self.nominal_bias;
+        let mut corrected = imu - self.nominal_bias;
+        for ((c, s), f) in corrected.iter_mut().zip(r.status.iter()).zip(r.fault_estimate.iter()) {
+            if matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative) {
+                *c -= *f;
+            }
+        }
+        r.corrected_imu = corrected;
+        r.covariance_resets = self.ukf.covariance_resets();
+        if !updated {
+            r.diag = [ChannelDiag::default(); NZ];
+        }
+        r
+    }
+}
