@@ -1,1 +1,29 @@
-pub fn placeholder() {}
+//! # hal-sim
+//!
+//! The simulated hardware for `imu-fdi`: deterministic vehicle trajectories
+//! with exact IMU truth ([`trajectory`]), a datasheet-class IMU error model
+//! ([`imu_model`]), aiding sensors at their own rates, fault injection
+//! ([`fault`]) and scenarios as data ([`scenario`]), all `no_std` so the same
+//! models can run inside firmware. With the default `std` feature it adds the
+//! scenario runner and SPEC §9 metrics ([`runner`], [`metrics`]), the SPEC §10
+//! replay format ([`replay`]) and the `imu-fdi-sim` CLI.
+#![cfg_attr(not(feature = "std"), no_std)]
+
+pub mod fault;
+pub mod imu_model;
+pub mod scenario;
+pub mod sim;
+pub mod trajectory;
+
+#[cfg(feature = "std")]
+pub mod metrics;
+#[cfg(feature = "std")]
+pub mod replay;
+#[cfg(feature = "std")]
+pub mod runner;
+
+pub use fault::{FaultKind, FaultRow, FaultSizes};
+pub use imu_model::{ImuErrors, SimImu, TriadErrors};
+pub use scenario::{AidingSpec, Scenario};
+pub use sim::{SimSample, Simulator};
+pub use trajectory::{Profile, Trajectory, Truth};

@@ -42,6 +42,12 @@ pub enum Detector {
 pub enum Statistic {
     /// The paper's test on raw innovations (variance estimated in the window).
     Raw,
-    /// The same test on innovations pre-whitened by the filter's `√S_ii`.
+    /// The same t-test on innovations pre-whitened by the filter's `√S_ii`.
     Whitened,
+    /// Windowed normalised-innovation test: the filter's `S_ii` is used as
+    /// the known variance, `z = Σ rᵢ/√S_ii / √n`, compared with the normal
+    /// quantile. No variance is estimated in the window, so it reacts as soon
+    /// as a few in-fault samples arrive instead of when the window is full of
+    /// them (SPEC §5 "stronger alternative").
+    Normalized,
 }

@@ -56,6 +56,10 @@ pub struct UkfMonitorConfig<T> {
     /// Smallest fault per IMU channel the monitor is specified to detect; used
     /// to scale the threshold method and the run-time sign matrix.
     pub min_fault: ImuVec<T>,
+    /// Threshold method: a channel is flagged when its t-test fires and the
+    /// window mean mapped through the diagonal of `M` exceeds this fraction
+    /// of `min_fault`.
+    pub threshold_fraction: T,
     /// Consecutive detections needed to raise or clear a channel flag.
     pub persistence: u16,
     /// Time from alignment to the start of learning, s.
@@ -110,7 +114,7 @@ impl<T: Real> UkfMonitorConfig<T> {
             gate_sigma: T::lit(8.0),
             gate_max_rejections: 2,
             alpha: 1e-6,
-            statistic: Statistic::Raw,
+            statistic: Statistic::Normalized,
             detector: Detector::RuntimeMatrixGlr,
             glr_threshold: T::lit(40.0),
             sign_deadband: T::lit(0.3),
@@ -122,6 +126,7 @@ impl<T: Real> UkfMonitorConfig<T> {
                 T::lit(0.3 * deg),
                 T::lit(0.3 * deg),
             ),
+            threshold_fraction: T::lit(1.0),
             persistence: 2,
             converge_s: T::lit(3.0),
             learn_s: T::lit(7.0),

@@ -7,6 +7,7 @@ use crate::detect::{
 };
 use crate::filter::{ChannelDiag, Gate, Ukf, UkfError};
 use crate::math::Real;
+use crate::stats::normal_upper_quantile;
 use crate::model::{
     discrete_process_noise, AidingKind, ImuVec, Mat6, Measurement, MeasurementModel, ModelError, StateVec, VehicleModel,
     NX, NZ, PITCH, ROLL, STATE_ANGLES, YAW,
@@ -41,6 +42,7 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     ukf: Ukf<T, NX, 13>,
     gate: Gate<T, NZ>,
     ttest: TTest<T>,
+    z_threshold: T,
     windows: [InnovationWindow<T, W>; NZ],
     since_seen: [T; NZ],
     sensitivity: Mat6<T>,
@@ -67,6 +69,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     pub fn new(cfg: UkfMonitorConfig<T>) -> Result<Self, ConfigError> {
         cfg.validate()?;
         let ttest = TTest::new(cfg.alpha, W).map_err(|_| ConfigError::TTest)?;
+        let z_threshold = T::lit(normal_upper_quantile(cfg.alpha).map_err(|_| ConfigError::TTest)?);
         let p0 = Mat6::from_diagonal(&cfg.initial_sigma.component_mul(&cfg.initial_sigma));
         let ukf = Ukf::new(StateVec::zeros(), p0, &cfg.sigma, STATE_ANGLES).ok_or(ConfigError::SigmaParams)?;
         let mut meas = MeasurementModel::new(cfg.aiding);
@@ -87,6 +90,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             ukf,
             gate: Gate::new(cfg.gate_sigma, cfg.gate_max_rejections),
             ttest,
+            z_threshold,
             windows: core::array::from_fn(|_| InnovationWindow::new()),
             since_seen: [T::lit(1e9); NZ],
             sensitivity: Mat6::zeros(),
@@ -118,9 +122,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     pub fn phase(&self) -> Phase {
         self.phase
     }
-    /// The t-test critical value in use.
+    /// The critical value of the window statistic in use (Student-t
+    /// quantile, or the normal quantile for [`Statistic::Normalized`]).
     pub fn t_threshold(&self) -> T {
-        self.ttest.threshold
+        match self.cfg.statistic {
+            Statistic::Normalized => self.z_threshold,
+            _ => self.ttest.threshold,
+        }
     }
     /// The current closed-loop signature matrix `M` (rows innovations,
     /// columns faults; raw units).
@@ -325,7 +333,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             if record && d.fused {
                 let v = match self.cfg.statistic {
                     Statistic::Raw => d.innovation,
-                    Statistic::Whitened => d.innovation / d.variance.sqrt_fast(),
+                    Statistic::Whitened | Statistic::Normalized => d.innovation / d.variance.sqrt_fast(),
                 };
                 if let Some(w) = self.windows.get_mut(i) {
                     w.push(v);
@@ -342,7 +350,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     fn window_scale(&self) -> ImuVec<T> {
         match self.cfg.statistic {
             Statistic::Raw => ImuVec::from_element(T::one()),
-            Statistic::Whitened => self.latest_variance.map(|v| T::one() / v.sqrt_fast()),
+            Statistic::Whitened | Statistic::Normalized => self.latest_variance.map(|v| T::one() / v.sqrt_fast()),
         }
     }
 
@@ -365,7 +373,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                         .report
                         .t_statistic
                         .iter()
-                        .all(|t| t.abs() < self.ttest.threshold * T::lit(0.5));
+                        .all(|t| t.abs() < self.t_threshold() * T::lit(0.5));
                 if let (true, Some(f)) = (quiet, instant) {
                     let k = dt_learn / self.cfg.drift_tau_s;
                     for ((b, df), lim) in self.nominal_bias.iter_mut().zip(f.iter()).zip(self.cfg.drift_rate_limit.iter()) {
@@ -389,17 +397,27 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let mut rbar = ImuVec::<T>::zeros();
         let mut weight = ImuVec::<T>::zeros();
         let mut full = [false; NZ];
+        let threshold = self.t_threshold();
         for (i, w) in self.windows.iter().enumerate() {
             if !w.is_full() {
                 continue;
             }
             let Some(s) = w.stats() else { continue };
-            let t = t_statistic(&s);
+            let n = T::lit(s.n as f64);
+            let (t, var_mean) = match self.cfg.statistic {
+                Statistic::Normalized => (s.mean * n.sqrt_fast(), T::one() / n),
+                _ => (t_statistic(&s), s.std * s.std / n),
+            };
             full[i] = true;
             tstat[i] = t;
-            flags[i] = self.ttest.flag(t);
+            flags[i] = if t >= threshold {
+                1
+            } else if t <= -threshold {
+                -1
+            } else {
+                0
+            };
             rbar[i] = s.mean;
-            let var_mean = s.std * s.std / T::lit(s.n as f64);
             weight[i] = if var_mean > T::zero() { T::one() / var_mean } else { T::zero() };
         }
         let scale = self.window_scale();
@@ -415,7 +433,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                     let mjj = m_eff[(j, j)];
                     if flags[j] != 0 && mjj != T::zero() {
                         let f = rbar[j] / mjj;
-                        if f.abs() > self.cfg.min_fault[j] * T::lit(0.5) {
+                        if f.abs() > self.cfg.min_fault[j] * self.cfg.threshold_fraction {
                             *dj = if f > T::zero() { 1 } else { -1 };
                         }
                     }

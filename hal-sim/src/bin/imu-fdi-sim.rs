@@ -1,0 +1,213 @@
+//! `imu-fdi-sim`: run scenarios, replay logs and print SPEC §9 figures.
+
+use std::path::PathBuf;
+
+use anyhow::{anyhow, Result};
+use clap::{Parser, Subcommand, ValueEnum};
+use hal_sim::metrics::{evaluate, RunMetrics};
+use hal_sim::runner::{monitor_config, run, RunOptions};
+use hal_sim::Scenario;
+use imu_fdi::detect::{Detector, Statistic};
+use imu_fdi::monitor::UkfMonitorConfig;
+
+#[derive(Parser)]
+#[command(name = "imu-fdi-sim", version, about = "Simulate, replay and score the imu-fdi monitors")]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum DetectorArg {
+    /// [UKF] §3.1 threshold method.
+    Threshold,
+    /// Paper's fixed sign matrix (erratum applied).
+    Paper,
+    /// Paper's matrix exactly as printed.
+    PaperAsPrinted,
+    /// Run-time sign matrix C⁻¹·flag.
+    Runtime,
+    /// Run-time signature matrix with GLR isolation (default).
+    RuntimeGlr,
+}
+
+impl From<DetectorArg> for Detector {
+    fn from(d: DetectorArg) -> Self {
+        match d {
+            DetectorArg::Threshold => Detector::Threshold,
+            DetectorArg::Paper => Detector::PaperMatrix,
+            DetectorArg::PaperAsPrinted => Detector::PaperMatrixAsPrinted,
+            DetectorArg::Runtime => Detector::RuntimeMatrix,
+            DetectorArg::RuntimeGlr => Detector::RuntimeMatrixGlr,
+        }
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum StatisticArg {
+    /// The paper's t-test on raw innovations.
+    Raw,
+    /// t-test on innovations whitened by the filter's S.
+    Whitened,
+    /// Known-variance normalised-innovation test.
+    Normalized,
+}
+
+#[derive(clap::Args, Clone)]
+struct DetectOpts {
+    /// Decision rule (default: the scenario's: threshold for S1, runtime-glr otherwise).
+    #[arg(long, value_enum)]
+    detector: Option<DetectorArg>,
+    /// Samples in the t-test windows.
+    #[arg(long, value_enum, default_value = "normalized")]
+    statistic: StatisticArg,
+    /// Per-tail significance of the t-test.
+    #[arg(long, default_value_t = 1e-6)]
+    alpha: f64,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Run a built-in scenario (s1, s2, auv-hour, aircraft-hour) over seeds and print the per-channel table.
+    Scenario {
+        /// Scenario name.
+        name: String,
+        /// First seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Number of seeds.
+        #[arg(long, default_value_t = 5)]
+        seeds: u64,
+        #[command(flatten)]
+        detect: DetectOpts,
+        /// Also write the metrics as JSON here.
+        #[arg(long)]
+        json: Option<PathBuf>,
+        /// Write the first seed's per-sample trace as CSV here.
+        #[arg(long)]
+        trace: Option<PathBuf>,
+    },
+    /// S1 (threshold method) and S2 (run-time matrix + GLR, and the paper's fixed matrix) in one go.
+    Demo {
+        /// Number of seeds per scenario.
+        #[arg(long, default_value_t = 5)]
+        seeds: u64,
+    },
+    /// Write a simulated run in the SPEC §10 replay format (with truth columns).
+    Simulate {
+        /// Scenario name.
+        name: String,
+        /// Seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Output CSV.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Replay a SPEC §10 CSV through the monitor (default detector: run-time matrix + GLR).
+    Replay {
+        /// Input CSV.
+        input: PathBuf,
+        /// Per-row output CSV.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// JSON summary.
+        #[arg(long)]
+        summary: Option<PathBuf>,
+        #[command(flatten)]
+        detect: DetectOpts,
+    },
+}
+
+fn default_detector(name: &str) -> Detector {
+    if name.eq_ignore_ascii_case("s1") {
+        Detector::Threshold
+    } else {
+        Detector::RuntimeMatrixGlr
+    }
+}
+
+fn options(name: &str, d: &DetectOpts) -> RunOptions {
+    RunOptions {
+        detector: d.detector.map_or_else(|| default_detector(name), Detector::from),
+        statistic: match d.statistic {
+            StatisticArg::Raw => Statistic::Raw,
+            StatisticArg::Whitened => Statistic::Whitened,
+            StatisticArg::Normalized => Statistic::Normalized,
+        },
+        alpha: d.alpha,
+    }
+}
+
+fn campaign(scn: &Scenario, first: u64, seeds: u64, opts: &RunOptions) -> Result<RunMetrics> {
+    let mut total = RunMetrics::default();
+    for seed in first..first + seeds {
+        let trace = run::<f32>(scn, seed, opts).map_err(|e| anyhow!("monitor configuration: {e:?}"))?;
+        total.merge(&evaluate(&trace));
+    }
+    Ok(total)
+}
+
+fn scenario(name: &str) -> Result<Scenario> {
+    Scenario::builtin(name).ok_or_else(|| anyhow!("unknown scenario '{name}'; built-ins: {}", Scenario::BUILTIN.join(", ")))
+}
+
+fn print_run(title: &str, scn: &Scenario, first: u64, seeds: u64, opts: &RunOptions) -> Result<RunMetrics> {
+    let m = campaign(scn, first, seeds, opts)?;
+    println!("== {title}: {} seeds {}..{}, detector {:?}, statistic {:?}, α = {:e} (f32 monitor)", scn.name, first, first + seeds - 1, opts.detector, opts.statistic, opts.alpha);
+    print!("{}", m.table());
+    println!();
+    Ok(m)
+}
+
+fn main() -> Result<()> {
+    let cli = Cli::parse();
+    match cli.cmd {
+        Cmd::Scenario { name, seed, seeds, detect, json, trace } => {
+            let scn = scenario(&name)?;
+            let opts = options(&name, &detect);
+            if let Some(p) = trace {
+                let t = run::<f32>(&scn, seed, &opts).map_err(|e| anyhow!("monitor configuration: {e:?}"))?;
+                t.write_csv(&p)?;
+                println!("wrote trace of seed {seed} to {}", p.display());
+            }
+            let m = print_run("scenario", &scn, seed, seeds.max(1), &opts)?;
+            if let Some(p) = json {
+                std::fs::write(&p, serde_json::to_string_pretty(&m)?)?;
+                println!("wrote {}", p.display());
+            }
+        }
+        Cmd::Demo { seeds } => {
+            let seeds = seeds.max(1);
+            let s1 = scenario("s1")?;
+            let s2 = scenario("s2")?;
+            let base = RunOptions::default();
+            let a = print_run("S1, threshold method", &s1, 1, seeds, &RunOptions { detector: Detector::Threshold, ..base })?;
+            let b = print_run("S2, run-time matrix + GLR (default)", &s2, 1, seeds, &base)?;
+            let c = print_run("S2, paper's fixed matrix (erratum applied), for comparison", &s2, 1, seeds, &RunOptions { detector: Detector::PaperMatrix, ..base })?;
+            println!("summary: S1 false alarms {}, S2 false alarms {}, S2 paper-matrix false alarms {}", a.total_false_alarms(), b.total_false_alarms(), c.total_false_alarms());
+        }
+        Cmd::Simulate { name, seed, out } => {
+            let scn = scenario(&name)?;
+            let n = hal_sim::replay::write_simulated(&scn, seed, &out)?;
+            println!("wrote {n} rows of {} (seed {seed}) to {}", scn.name, out.display());
+        }
+        Cmd::Replay { input, out, summary, detect } => {
+            let opts = options("replay", &detect);
+            let mut cfg: UkfMonitorConfig<f64> = monitor_config(&Scenario::s2(), &opts);
+            cfg.detector = opts.detector;
+            let s = hal_sim::replay::replay(&input, out.as_deref(), summary.as_deref(), cfg)?;
+            println!("replayed {} rows ({} skipped, {} IMU rows rejected), aiding {}, monitoring from {:?} s", s.rows, s.skipped_rows, s.rejected_imu_rows, s.aiding, s.monitoring_from_s);
+            for c in &s.channels {
+                println!("  {:<3} flagged {:>6} samples, first at {:?} s", c.channel, c.flagged_samples, c.first_detection_s);
+            }
+            if let Some(p) = out {
+                println!("wrote {}", p.display());
+            }
+            if let Some(p) = summary {
+                println!("wrote {}", p.display());
+            }
+        }
+    }
+    Ok(())
+}
