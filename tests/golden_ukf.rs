@@ -6,17 +6,32 @@
 //! Acceptance: every state within 1e-9 of its scale max(|x|, σ), every
 //! covariance entry within 1e-9 of σᵢσⱼ, at every one of 1200 steps.
 
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic,
+    clippy::needless_range_loop
+)] // test code: a panic is a failed assertion
+
 use imu_fdi::filter::{Gate, SigmaParams, Ukf};
 use imu_fdi::model::{
-    discrete_process_noise, AidingKind, ImuNoisePsd, ImuVec, Mat6, MeasVec, MeasurementModel, StateVec, VehicleModel,
-    STATE_ANGLES,
+    discrete_process_noise, AidingKind, ImuNoisePsd, ImuVec, Mat6, MeasVec, MeasurementModel,
+    StateVec, VehicleModel, STATE_ANGLES,
 };
 use nalgebra::Vector3;
 
 fn check(file: &str, kind: AidingKind) {
-    let text = std::fs::read_to_string(format!("{}/tests/data/{file}", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let text = std::fs::read_to_string(format!("{}/tests/data/{file}", env!("CARGO_MANIFEST_DIR")))
+        .unwrap();
     let mut lines = text.lines();
-    let meta: Vec<f64> = lines.next().unwrap().trim_start_matches("# ").split(' ').map(|v| v.parse().unwrap()).collect();
+    let meta: Vec<f64> = lines
+        .next()
+        .unwrap()
+        .trim_start_matches("# ")
+        .split(' ')
+        .map(|v| v.parse().unwrap())
+        .collect();
     let psd = ImuVec::from_column_slice(&meta[0..6]);
     let sig = MeasVec::from_column_slice(&meta[6..12]);
     let x0 = StateVec::from_column_slice(&meta[12..18]);
@@ -25,14 +40,29 @@ fn check(file: &str, kind: AidingKind) {
     let model = VehicleModel::<f64>::default();
     let meas = MeasurementModel::<f64>::new(kind);
     let noise = ImuNoisePsd { psd };
-    let mut ukf = Ukf::<f64, 6, 13>::new(x0, Mat6::from_diagonal(&s0.component_mul(&s0)), &SigmaParams::default(), STATE_ANGLES).unwrap();
+    let mut ukf = Ukf::<f64, 6, 13>::new(
+        x0,
+        Mat6::from_diagonal(&s0.component_mul(&s0)),
+        &SigmaParams::default(),
+        STATE_ANGLES,
+    )
+    .unwrap();
     let r = sig.component_mul(&sig);
     let angles = [false, false, false, true, true, true];
     let mut gate = Gate::<f64, 6>::new(0.0, 0);
     let (mut worst_x, mut worst_p) = (0.0f64, 0.0f64);
     let mut rows = 0;
     for line in lines {
-        let v: Vec<f64> = line.split(',').map(|s| if s.is_empty() { f64::NAN } else { s.parse().unwrap() }).collect();
+        let v: Vec<f64> = line
+            .split(',')
+            .map(|s| {
+                if s.is_empty() {
+                    f64::NAN
+                } else {
+                    s.parse().unwrap()
+                }
+            })
+            .collect();
         let dt = v[1];
         let u = ImuVec::from_column_slice(&v[2..8]);
         let z = MeasVec::from_fn(|i, _| if v[8 + i].is_nan() { 0.0 } else { v[8 + i] });
@@ -41,7 +71,15 @@ fn check(file: &str, kind: AidingKind) {
         let q = discrete_process_noise(&model, &x_prior, &u, &noise, dt).unwrap();
         ukf.predict(|s| model.step(s, &u, dt), &q).unwrap();
         if avail.iter().any(|a| *a) {
-            ukf.update(&z, &avail, |s| Ok::<_, ()>(meas.predict(s, &Vector3::zeros())), &r, &angles, &mut gate).unwrap();
+            ukf.update(
+                &z,
+                &avail,
+                |s| Ok::<_, ()>(meas.predict(s, &Vector3::zeros())),
+                &r,
+                &angles,
+                &mut gate,
+            )
+            .unwrap();
         }
         let x_ref = StateVec::from_column_slice(&v[20..26]);
         let mut p_ref = Mat6::zeros();

@@ -1,6 +1,14 @@
 //! Bad input never panics and never leaks NaN: each case gets its status and
 //! the monitor recovers.
 
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic,
+    clippy::needless_range_loop
+)] // test code: a panic is a failed assertion
+
 use imu_fdi::filter::{SigmaParams, Ukf, UkfError};
 use imu_fdi::math::LinalgError;
 use imu_fdi::model::{ImuVec, Mat6, MeasVec, Measurement, StateVec, STATE_ANGLES};
@@ -28,7 +36,11 @@ fn aligned() -> UkfMonitor<f32> {
 }
 
 fn finite(r: &imu_fdi::monitor::Report<f32>) -> bool {
-    r.state.iter().chain(r.state_sigma.iter()).chain(r.fault_estimate.iter()).all(|v| v.is_finite())
+    r.state
+        .iter()
+        .chain(r.state_sigma.iter())
+        .chain(r.fault_estimate.iter())
+        .all(|v| v.is_finite())
 }
 
 #[test]
@@ -52,7 +64,11 @@ fn bad_dt_is_reported_and_gaps_are_bounded() {
         let before = *m.filter().state();
         let r = m.step(&level(), dt, &aiding(false));
         assert!(r.health.dt_out_of_range);
-        assert_eq!(*m.filter().state(), before, "state must not move for dt = {dt}");
+        assert_eq!(
+            *m.filter().state(),
+            before,
+            "state must not move for dt = {dt}"
+        );
     }
     let r = m.step(&level(), 3.0, &aiding(false));
     assert!(r.health.dt_out_of_range && finite(&r));
@@ -82,7 +98,14 @@ fn pitch_singularity_is_reported_not_nan() {
     // Align at 89°: the model refuses, the monitor keeps waiting.
     let mut z = MeasVec::zeros();
     z[4] = 89f32.to_radians();
-    let r = m.step(&level(), 0.01, &Measurement { z, available: [true; 6] });
+    let r = m.step(
+        &level(),
+        0.01,
+        &Measurement {
+            z,
+            available: [true; 6],
+        },
+    );
     assert_eq!(r.phase, Phase::Aligning);
     // Aligned level, then pitched up hard by a large q: reported, finite.
     let mut m = aligned();
@@ -100,12 +123,19 @@ fn pitch_singularity_is_reported_not_nan() {
 #[test]
 fn lost_cholesky_is_an_error_with_recovery() {
     let p0 = Mat6::<f64>::identity() * 0.01;
-    let mut ukf = Ukf::<f64, 6, 13>::new(StateVec::zeros(), p0, &SigmaParams::default(), STATE_ANGLES).unwrap();
+    let mut ukf =
+        Ukf::<f64, 6, 13>::new(StateVec::zeros(), p0, &SigmaParams::default(), STATE_ANGLES)
+            .unwrap();
     let mut bad = Mat6::identity();
     bad[(2, 2)] = -1.0;
     ukf.reset(StateVec::zeros(), bad);
     let r = ukf.predict(|x| Ok::<_, ()>(*x), &Mat6::zeros());
-    assert_eq!(r, Err(UkfError::CovarianceReset(LinalgError::NotPositiveDefinite(2))));
+    assert_eq!(
+        r,
+        Err(UkfError::CovarianceReset(LinalgError::NotPositiveDefinite(
+            2
+        )))
+    );
     assert_eq!(ukf.covariance_resets(), 1);
     assert!((ukf.covariance() - p0).amax() < 1e-15);
     assert_eq!(ukf.predict(|x| Ok::<_, ()>(*x), &Mat6::zeros()), Ok(()));
@@ -116,7 +146,14 @@ fn nan_aiding_channels_are_ignored() {
     let mut m = aligned();
     let mut z = MeasVec::zeros();
     z[0] = f32::NAN;
-    let r = m.step(&level(), 0.01, &Measurement { z, available: [true; 6] });
+    let r = m.step(
+        &level(),
+        0.01,
+        &Measurement {
+            z,
+            available: [true; 6],
+        },
+    );
     assert!(finite(&r));
     assert!(!r.diag[0].fused);
 }

@@ -2,11 +2,23 @@
 //! over SPEC §5's range, on a grid and at random off-grid (n, α) pairs, and the
 //! round trip through the t CDF.
 
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic,
+    clippy::needless_range_loop
+)] // test code: a panic is a failed assertion
+
 use imu_fdi::stats::{student_t_upper_quantile, student_t_upper_tail};
 
 #[test]
 fn quantile_matches_scipy_to_1e_4_relative() {
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/student_t_ppf.csv")).unwrap();
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/student_t_ppf.csv"
+    ))
+    .unwrap();
     let mut worst = 0.0f64;
     let mut n = 0;
     for line in text.lines().skip(1) {
@@ -28,7 +40,10 @@ fn quantile_round_trips_through_the_cdf() {
         for alpha in [1e-6, 3e-5, 1e-3, 0.05, 0.2] {
             let t = student_t_upper_quantile(alpha, nu).unwrap();
             let back = student_t_upper_tail(t, nu);
-            assert!((back / alpha - 1.0).abs() < 1e-9, "nu={nu} alpha={alpha}: tail(t) = {back}");
+            assert!(
+                (back / alpha - 1.0).abs() < 1e-9,
+                "nu={nu} alpha={alpha}: tail(t) = {back}"
+            );
         }
     }
 }

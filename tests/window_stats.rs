@@ -1,6 +1,14 @@
 //! `f32` window statistics against an `f64` recomputation over 10⁷ samples
 //! of a biased signal (the case where Σx² − n·mean² collapses).
 
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic,
+    clippy::needless_range_loop
+)] // test code: a panic is a failed assertion
+
 use imu_fdi::detect::InnovationWindow;
 use rand::{Rng, SeedableRng};
 
@@ -19,7 +27,8 @@ fn f32_window_matches_f64_over_ten_million_samples() {
         if k >= N && k % 97 == 0 {
             let s = w.stats().unwrap();
             let mean = ring.iter().sum::<f64>() / N as f64;
-            let std = (ring.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (N - 1) as f64).sqrt();
+            let std =
+                (ring.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (N - 1) as f64).sqrt();
             worst_mean = worst_mean.max((f64::from(s.mean) - mean).abs() / mean.abs());
             worst_std = worst_std.max((f64::from(s.std) - std).abs() / std);
         }

@@ -77,7 +77,11 @@ impl FaultRow {
         let tau = t - self.start;
         let gyro = self.channel >= 3;
         let abc = if gyro { sizes.gyro } else { sizes.accel };
-        let unit = if gyro { sizes.f_unit[1] } else { sizes.f_unit[0] };
+        let unit = if gyro {
+            sizes.f_unit[1]
+        } else {
+            sizes.f_unit[0]
+        };
         let v = match self.kind {
             FaultKind::E1 => abc[0],
             FaultKind::E2 => abc[1] * tau,
@@ -94,7 +98,12 @@ impl FaultRow {
     pub fn is_hardware(&self) -> bool {
         !matches!(
             self.kind,
-            FaultKind::E1 | FaultKind::E2 | FaultKind::E3 | FaultKind::F1 | FaultKind::F2 | FaultKind::F3
+            FaultKind::E1
+                | FaultKind::E2
+                | FaultKind::E3
+                | FaultKind::F1
+                | FaultKind::F2
+                | FaultKind::F3
         )
     }
 }

@@ -131,7 +131,14 @@ impl TriadState {
         Self { spec, matrix, bias }
     }
 
-    fn measure(&mut self, truth: &[f64], fault: &[f64], rate_hz: f64, dt: f64, rng: &mut Xoshiro256PlusPlus) -> [f64; 3] {
+    fn measure(
+        &mut self,
+        truth: &[f64],
+        fault: &[f64],
+        rate_hz: f64,
+        dt: f64,
+        rng: &mut Xoshiro256PlusPlus,
+    ) -> [f64; 3] {
         let sigma = self.spec.noise_density * libm::sqrt(rate_hz);
         let rw = self.spec.bias_random_walk * libm::sqrt(dt);
         let mut out = [0.0; 3];
@@ -178,14 +185,27 @@ impl SimImu {
     }
 
     /// One sample from the ideal output and an additive fault.
-    pub fn measure(&mut self, truth: &[f64; 6], fault: &[f64; 6], rng: &mut Xoshiro256PlusPlus) -> [f64; 6] {
+    pub fn measure(
+        &mut self,
+        truth: &[f64; 6],
+        fault: &[f64; 6],
+        rng: &mut Xoshiro256PlusPlus,
+    ) -> [f64; 6] {
         let dt = 1.0 / self.rate_hz;
-        let a = self
-            .accel
-            .measure(truth.get(0..3).unwrap_or(&[]), fault.get(0..3).unwrap_or(&[]), self.rate_hz, dt, rng);
-        let g = self
-            .gyro
-            .measure(truth.get(3..6).unwrap_or(&[]), fault.get(3..6).unwrap_or(&[]), self.rate_hz, dt, rng);
+        let a = self.accel.measure(
+            truth.get(0..3).unwrap_or(&[]),
+            fault.get(0..3).unwrap_or(&[]),
+            self.rate_hz,
+            dt,
+            rng,
+        );
+        let g = self.gyro.measure(
+            truth.get(3..6).unwrap_or(&[]),
+            fault.get(3..6).unwrap_or(&[]),
+            self.rate_hz,
+            dt,
+            rng,
+        );
         [a[0], a[1], a[2], g[0], g[1], g[2]]
     }
 
@@ -196,4 +216,3 @@ impl SimImu {
         [a, a, a, g, g, g]
     }
 }
-

@@ -136,7 +136,11 @@ impl RunMetrics {
     }
     fn finish(&mut self) {
         for i in 0..6 {
-            self.state_rmse[i] = if self.state_n > 0 { (self.state_se[i] / self.state_n as f64).sqrt() } else { 0.0 };
+            self.state_rmse[i] = if self.state_n > 0 {
+                (self.state_se[i] / self.state_n as f64).sqrt()
+            } else {
+                0.0
+            };
         }
     }
 
@@ -150,7 +154,16 @@ impl RunMetrics {
         let mut s = String::new();
         s.push_str(&format!(
             "{:<4} {:>6} {:>9} {:>9} {:>10} {:>10} {:>9} {:>9} {:>11} {:>11}\n",
-            "ch", "faults", "detected", "det.rate", "false.al.", "wrong.ch.", "delay.mn", "delay.mx", "rmse.corr", "rmse.paper"
+            "ch",
+            "faults",
+            "detected",
+            "det.rate",
+            "false.al.",
+            "wrong.ch.",
+            "delay.mn",
+            "delay.mx",
+            "rmse.corr",
+            "rmse.paper"
         ));
         for (c, name) in self.channels.iter().zip(CHANNEL_NAMES.iter()) {
             let pct = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{:.2}%", 100.0 * x));
@@ -195,10 +208,14 @@ pub fn evaluate(trace: &Trace) -> RunMetrics {
     // Per fault row: detection rate, delay, RMSE.
     for fr in scn.faults.iter() {
         let j = fr.channel;
-        let Some(c) = m.channels.get_mut(j) else { continue };
+        let Some(c) = m.channels.get_mut(j) else {
+            continue;
+        };
         let mdf = scn.min_fault.get(j).copied().unwrap_or(0.0);
         c.faults += 1;
-        let in_window = rows.iter().filter(|r| fr.active(r.t) && r.phase == Phase::Monitoring);
+        let in_window = rows
+            .iter()
+            .filter(|r| fr.active(r.t) && r.phase == Phase::Monitoring);
         let t_detectable = rows
             .iter()
             .filter(|r| fr.active(r.t))
@@ -228,7 +245,10 @@ pub fn evaluate(trace: &Trace) -> RunMetrics {
             // A channel is "wrong" only if no fault of its own is active or
             // ended within the grace period (its flag may still be releasing).
             let wrong = (0..6).any(|k| {
-                let own_recent = scn.faults.iter().any(|f| f.channel == k && r.t >= f.start && r.t < f.end + grace);
+                let own_recent = scn
+                    .faults
+                    .iter()
+                    .any(|f| f.channel == k && r.t >= f.start && r.t < f.end + grace);
                 !own_recent && r.flag[k].is_some_and(|v| v != 0)
             });
             c.wrong_channel += usize::from(wrong);
@@ -243,7 +263,10 @@ pub fn evaluate(trace: &Trace) -> RunMetrics {
     // False alarms in fault-free monitored time.
     let mut prev_any = false;
     for r in rows.iter().filter(|r| r.phase == Phase::Monitoring) {
-        let near_fault = scn.faults.iter().any(|f| r.t >= f.start && r.t < f.end + grace);
+        let near_fault = scn
+            .faults
+            .iter()
+            .any(|f| r.t >= f.start && r.t < f.end + grace);
         if near_fault {
             prev_any = false;
             continue;

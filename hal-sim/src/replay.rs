@@ -7,10 +7,12 @@ use anyhow::{bail, Context, Result};
 use imu_fdi::model::{AidingKind, ImuVec, MeasVec, Measurement, CHANNEL_NAMES};
 use imu_fdi::monitor::{Phase, UkfMonitor, UkfMonitorConfig};
 
-use crate::sim::Simulator;
 use crate::scenario::Scenario;
+use crate::sim::Simulator;
 
-const IMU_COLS: [&str; 6] = ["imu0_ax", "imu0_ay", "imu0_az", "imu0_gx", "imu0_gy", "imu0_gz"];
+const IMU_COLS: [&str; 6] = [
+    "imu0_ax", "imu0_ay", "imu0_az", "imu0_gx", "imu0_gy", "imu0_gz",
+];
 const DVL_COLS: [&str; 3] = ["dvl_u", "dvl_v", "dvl_w"];
 const GNSS_COLS: [&str; 3] = ["gnss_vn", "gnss_ve", "gnss_vd"];
 const ATT_COLS: [&str; 3] = ["att_roll", "att_pitch", "att_yaw"];
@@ -59,12 +61,20 @@ fn parse_opt(rec: &csv::StringRecord, idx: Option<usize>) -> Option<f64> {
 
 /// Replays `input` through a monitor configured by `cfg` (its aiding kind is
 /// overridden by the columns present) and writes `out` / `summary`.
-pub fn replay(input: &Path, out: Option<&Path>, summary: Option<&Path>, mut cfg: UkfMonitorConfig<f64>) -> Result<ReplaySummary> {
+pub fn replay(
+    input: &Path,
+    out: Option<&Path>,
+    summary: Option<&Path>,
+    mut cfg: UkfMonitorConfig<f64>,
+) -> Result<ReplaySummary> {
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_path(input)
         .with_context(|| format!("cannot open {}", input.display()))?;
-    let headers = rdr.headers().with_context(|| format!("{}: no header row", input.display()))?.clone();
+    let headers = rdr
+        .headers()
+        .with_context(|| format!("{}: no header row", input.display()))?
+        .clone();
     let col: HashMap<&str, usize> = headers.iter().enumerate().map(|(i, h)| (h, i)).collect();
     let find = |name: &str| col.get(name).copied();
     let t_idx = find("t").with_context(|| format!("{}: missing column 't'", input.display()))?;
@@ -77,17 +87,26 @@ pub fn replay(input: &Path, out: Option<&Path>, summary: Option<&Path>, mut cfg:
     let (kind, vel_cols) = match (has_dvl, has_gnss) {
         (true, false) | (false, false) => (AidingKind::DvlCompass, DVL_COLS),
         (false, true) => (AidingKind::GnssAttitude, GNSS_COLS),
-        (true, true) => bail!("{}: both dvl_* and gnss_* columns; give one aiding source", input.display()),
+        (true, true) => bail!(
+            "{}: both dvl_* and gnss_* columns; give one aiding source",
+            input.display()
+        ),
     };
     cfg.aiding = kind;
     let vel_idx: Vec<Option<usize>> = vel_cols.iter().map(|c| find(c)).collect();
     let att_idx: Vec<Option<usize>> = ATT_COLS.iter().map(|c| find(c)).collect();
-    let truth_idx: Vec<Option<usize>> = CHANNEL_NAMES.iter().map(|c| find(&format!("fault_imu0_{c}"))).collect();
+    let truth_idx: Vec<Option<usize>> = CHANNEL_NAMES
+        .iter()
+        .map(|c| find(&format!("fault_imu0_{c}")))
+        .collect();
     let has_truth = truth_idx.iter().all(|i| i.is_some());
 
-    let mut monitor = UkfMonitor::<f64>::new(cfg).map_err(|e| anyhow::anyhow!("invalid monitor configuration: {e:?}"))?;
+    let mut monitor = UkfMonitor::<f64>::new(cfg)
+        .map_err(|e| anyhow::anyhow!("invalid monitor configuration: {e:?}"))?;
     let mut writer = match out {
-        Some(p) => Some(csv::Writer::from_path(p).with_context(|| format!("cannot write {}", p.display()))?),
+        Some(p) => Some(
+            csv::Writer::from_path(p).with_context(|| format!("cannot write {}", p.display()))?,
+        ),
         None => None,
     };
     if let Some(w) = writer.as_mut() {
@@ -120,7 +139,8 @@ pub fn replay(input: &Path, out: Option<&Path>, summary: Option<&Path>, mut cfg:
     let mut last_t: Option<f64> = None;
     let mut nominal_dt = monitor.config().imu_period;
     for (line, rec) in rdr.records().enumerate() {
-        let rec = rec.with_context(|| format!("{}: bad CSV at data row {}", input.display(), line + 1))?;
+        let rec =
+            rec.with_context(|| format!("{}: bad CSV at data row {}", input.display(), line + 1))?;
         sum.rows += 1;
         let Some(t) = parse_opt(&rec, Some(t_idx)) else {
             sum.skipped_rows += 1;
@@ -138,7 +158,8 @@ pub fn replay(input: &Path, out: Option<&Path>, summary: Option<&Path>, mut cfg:
             nominal_dt = dt;
         }
         last_t = Some(t);
-        let imu = ImuVec::from_fn(|i, _| parse_opt(&rec, imu_idx.get(i).copied()).unwrap_or(f64::NAN));
+        let imu =
+            ImuVec::from_fn(|i, _| parse_opt(&rec, imu_idx.get(i).copied()).unwrap_or(f64::NAN));
         let mut z = MeasVec::zeros();
         let mut avail = [false; 6];
         for (i, idx) in vel_idx.iter().chain(att_idx.iter()).enumerate() {
@@ -147,14 +168,26 @@ pub fn replay(input: &Path, out: Option<&Path>, summary: Option<&Path>, mut cfg:
                 avail[i] = true;
             }
         }
-        let r = monitor.step(&imu, dt, &Measurement { z, available: avail });
+        let r = monitor.step(
+            &imu,
+            dt,
+            &Measurement {
+                z,
+                available: avail,
+            },
+        );
         if r.health.input_invalid {
             sum.rejected_imu_rows += 1;
         }
         if r.phase == Phase::Monitoring && sum.monitoring_from_s.is_none() {
             sum.monitoring_from_s = Some(t);
         }
-        let truth: Option<Vec<f64>> = has_truth.then(|| truth_idx.iter().map(|i| parse_opt(&rec, *i).unwrap_or(0.0)).collect());
+        let truth: Option<Vec<f64>> = has_truth.then(|| {
+            truth_idx
+                .iter()
+                .map(|i| parse_opt(&rec, *i).unwrap_or(0.0))
+                .collect()
+        });
         for (i, ch) in sum.channels.iter_mut().enumerate() {
             let flag = r.status[i].sign();
             let flagged = flag.is_some_and(|f| f != 0);
@@ -191,7 +224,8 @@ pub fn replay(input: &Path, out: Option<&Path>, summary: Option<&Path>, mut cfg:
         w.flush()?;
     }
     if let Some(p) = summary {
-        std::fs::write(p, serde_json::to_string_pretty(&sum)?).with_context(|| format!("cannot write {}", p.display()))?;
+        std::fs::write(p, serde_json::to_string_pretty(&sum)?)
+            .with_context(|| format!("cannot write {}", p.display()))?;
     }
     Ok(sum)
 }
@@ -199,7 +233,8 @@ pub fn replay(input: &Path, out: Option<&Path>, summary: Option<&Path>, mut cfg:
 /// Writes a simulated run in the SPEC §10 input format, with truth columns
 /// (`fault_imu0_*`, `truth_*`) that `replay` scores against.
 pub fn write_simulated(scn: &Scenario, seed: u64, path: &Path) -> Result<u64> {
-    let mut w = csv::Writer::from_path(path).with_context(|| format!("cannot write {}", path.display()))?;
+    let mut w =
+        csv::Writer::from_path(path).with_context(|| format!("cannot write {}", path.display()))?;
     let vel = match scn.aiding.kind {
         AidingKind::DvlCompass => DVL_COLS,
         AidingKind::GnssAttitude => GNSS_COLS,
@@ -209,7 +244,18 @@ pub fn write_simulated(scn: &Scenario, seed: u64, path: &Path) -> Result<u64> {
     h.extend(vel.iter().map(|s| s.to_string()));
     h.extend(ATT_COLS.iter().map(|s| s.to_string()));
     h.extend(CHANNEL_NAMES.iter().map(|c| format!("fault_imu0_{c}")));
-    h.extend(["truth_u", "truth_v", "truth_w", "truth_roll", "truth_pitch", "truth_yaw"].iter().map(|s| s.to_string()));
+    h.extend(
+        [
+            "truth_u",
+            "truth_v",
+            "truth_w",
+            "truth_roll",
+            "truth_pitch",
+            "truth_yaw",
+        ]
+        .iter()
+        .map(|s| s.to_string()),
+    );
     w.write_record(&h)?;
     let mut n = 0;
     for s in Simulator::new(scn, seed) {
@@ -219,7 +265,11 @@ pub fn write_simulated(scn: &Scenario, seed: u64, path: &Path) -> Result<u64> {
             None => row.extend(std::iter::repeat_n(String::new(), 6)),
         }
         for i in 0..6 {
-            row.push(if s.aiding_available[i] { format!("{:.9e}", s.aiding[i]) } else { String::new() });
+            row.push(if s.aiding_available[i] {
+                format!("{:.9e}", s.aiding[i])
+            } else {
+                String::new()
+            });
         }
         row.extend(s.fault.iter().map(|x| format!("{x:.9e}")));
         row.extend(s.truth.state.iter().map(|x| format!("{x:.9e}")));

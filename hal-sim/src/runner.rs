@@ -103,7 +103,14 @@ pub fn monitor_config<T: Real>(scn: &Scenario, opts: &RunOptions) -> UkfMonitorC
     );
     let fa = scn.imu_errors.accel.full_scale;
     let fg = scn.imu_errors.gyro.full_scale;
-    c.full_scale = ImuVec::new(T::lit(fa), T::lit(fa), T::lit(fa), T::lit(fg), T::lit(fg), T::lit(fg));
+    c.full_scale = ImuVec::new(
+        T::lit(fa),
+        T::lit(fa),
+        T::lit(fa),
+        T::lit(fg),
+        T::lit(fg),
+        T::lit(fg),
+    );
     c.imu_period = T::lit(1.0 / scn.imu_rate_hz);
     c.detector = opts.detector;
     c.statistic = opts.statistic;
@@ -119,13 +126,21 @@ pub fn latency_s(scn: &Scenario) -> f64 {
 }
 
 /// Runs scenario `scn` with `seed` through a monitor in precision `T`.
-pub fn run<T: Real>(scn: &Scenario, seed: u64, opts: &RunOptions) -> Result<Trace, imu_fdi::monitor::ConfigError> {
+pub fn run<T: Real>(
+    scn: &Scenario,
+    seed: u64,
+    opts: &RunOptions,
+) -> Result<Trace, imu_fdi::monitor::ConfigError> {
     let cfg = monitor_config::<T>(scn, opts);
     run_with::<T>(scn, seed, cfg)
 }
 
 /// Runs with an explicit monitor configuration.
-pub fn run_with<T: Real>(scn: &Scenario, seed: u64, cfg: UkfMonitorConfig<T>) -> Result<Trace, imu_fdi::monitor::ConfigError> {
+pub fn run_with<T: Real>(
+    scn: &Scenario,
+    seed: u64,
+    cfg: UkfMonitorConfig<T>,
+) -> Result<Trace, imu_fdi::monitor::ConfigError> {
     let mut monitor = UkfMonitor::<T>::new(cfg)?;
     let sim = Simulator::new(scn, seed);
     let mut rows = Vec::with_capacity(sim.len() as usize);
@@ -139,7 +154,8 @@ pub fn run_with<T: Real>(scn: &Scenario, seed: u64, cfg: UkfMonitorConfig<T>) ->
             available: s.aiding_available,
         };
         let r = monitor.step(&u, T::lit(s.dt), &m);
-        let f = |v: &nalgebra::SVector<T, 6>| -> [f64; 6] { core::array::from_fn(|i| v[i].to_f64()) };
+        let f =
+            |v: &nalgebra::SVector<T, 6>| -> [f64; 6] { core::array::from_fn(|i| v[i].to_f64()) };
         rows.push(TraceRow {
             t: s.t,
             fault: s.fault,
@@ -154,7 +170,13 @@ pub fn run_with<T: Real>(scn: &Scenario, seed: u64, cfg: UkfMonitorConfig<T>) ->
             true_bias: s.imu_bias,
             phase: r.phase,
             t_stat: core::array::from_fn(|i| r.t_statistic[i].to_f64()),
-            innovation: core::array::from_fn(|i| if r.diag[i].available { r.diag[i].innovation.to_f64() } else { f64::NAN }),
+            innovation: core::array::from_fn(|i| {
+                if r.diag[i].available {
+                    r.diag[i].innovation.to_f64()
+                } else {
+                    f64::NAN
+                }
+            }),
             innovation_sigma: core::array::from_fn(|i| {
                 if r.diag[i].available {
                     r.diag[i].variance.to_f64().sqrt()
@@ -182,19 +204,51 @@ impl Trace {
         let mut w = csv::Writer::from_path(path)?;
         let names = imu_fdi::model::CHANNEL_NAMES;
         let mut h = vec!["t".to_string(), "phase".to_string()];
-        for prefix in ["fault", "flag", "fhat", "fhat_paper", "nominal_bias", "true_bias"] {
+        for prefix in [
+            "fault",
+            "flag",
+            "fhat",
+            "fhat_paper",
+            "nominal_bias",
+            "true_bias",
+        ] {
             h.extend(names.iter().map(|c| format!("{prefix}_{c}")));
         }
         for prefix in ["x", "truth", "sigma", "innov", "innov_sigma", "stat"] {
-            h.extend(["u", "v", "w", "roll", "pitch", "yaw"].iter().map(|c| format!("{prefix}_{c}")));
+            h.extend(
+                ["u", "v", "w", "roll", "pitch", "yaw"]
+                    .iter()
+                    .map(|c| format!("{prefix}_{c}")),
+            );
         }
         w.write_record(&h)?;
         for r in &self.rows {
             let mut row = vec![format!("{:.3}", r.t), format!("{:?}", r.phase)];
             row.extend(r.fault.iter().map(|v| format!("{v:.6e}")));
-            row.extend(r.flag.iter().map(|f| f.map_or(String::new(), |v| v.to_string())));
-            for arr in [&r.fhat, &r.fhat_as_written, &r.nominal_bias, &r.true_bias, &r.state, &r.truth, &r.sigma, &r.innovation, &r.innovation_sigma, &r.t_stat] {
-                row.extend(arr.iter().map(|v| if v.is_nan() { String::new() } else { format!("{v:.6e}") }));
+            row.extend(
+                r.flag
+                    .iter()
+                    .map(|f| f.map_or(String::new(), |v| v.to_string())),
+            );
+            for arr in [
+                &r.fhat,
+                &r.fhat_as_written,
+                &r.nominal_bias,
+                &r.true_bias,
+                &r.state,
+                &r.truth,
+                &r.sigma,
+                &r.innovation,
+                &r.innovation_sigma,
+                &r.t_stat,
+            ] {
+                row.extend(arr.iter().map(|v| {
+                    if v.is_nan() {
+                        String::new()
+                    } else {
+                        format!("{v:.6e}")
+                    }
+                }));
             }
             w.write_record(&row)?;
         }

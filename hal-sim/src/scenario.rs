@@ -46,7 +46,9 @@ mod aiding_kind_serde {
         match s.as_str() {
             "dvl-compass" => Ok(AidingKind::DvlCompass),
             "gnss-attitude" => Ok(AidingKind::GnssAttitude),
-            other => Err(serde::de::Error::custom(format!("unknown aiding kind '{other}'"))),
+            other => Err(serde::de::Error::custom(format!(
+                "unknown aiding kind '{other}'"
+            ))),
         }
     }
 }
@@ -231,6 +233,8 @@ impl Scenario {
 
     /// Whether any fault row is active on `channel` at `t`.
     pub fn fault_active(&self, channel: usize, t: f64) -> bool {
-        self.faults.iter().any(|r| r.channel == channel && r.active(t))
+        self.faults
+            .iter()
+            .any(|r| r.channel == channel && r.active(t))
     }
 }

@@ -107,8 +107,15 @@ impl Simulator {
     fn apply_hardware(&mut self, t: f64, truth: &Truth, sample: &mut [f64; 6]) -> bool {
         let mut present = true;
         let rate = self.scenario.imu_rate_hz;
-        for r in self.scenario.faults.iter().filter(|r| r.is_hardware() && r.active(t)) {
-            let Some(v) = sample.get_mut(r.channel) else { continue };
+        for r in self
+            .scenario
+            .faults
+            .iter()
+            .filter(|r| r.is_hardware() && r.active(t))
+        {
+            let Some(v) = sample.get_mut(r.channel) else {
+                continue;
+            };
             let last = self.last_output.get(r.channel).copied().unwrap_or(0.0);
             let gyro = r.channel >= 3;
             let spec = if gyro {
@@ -120,17 +127,17 @@ impl Simulator {
                 FaultKind::Stuck => *v = last,
                 FaultKind::Dropout => present = false,
                 FaultKind::Clip(level) => *v = v.clamp(-level, level),
-                FaultKind::Spikes(amp) => {
-                    if (t - r.start) % 0.5 < 0.03 {
-                        *v += amp;
-                    }
-                }
+                FaultKind::Spikes(amp) if (t - r.start) % 0.5 < 0.03 => *v += amp,
                 FaultKind::NoiseIncrease(factor) => {
-                    let extra = spec.noise_density * libm::sqrt(rate) * libm::sqrt((factor * factor - 1.0).max(0.0));
+                    let extra = spec.noise_density
+                        * libm::sqrt(rate)
+                        * libm::sqrt((factor * factor - 1.0).max(0.0));
                     let n: f64 = StandardNormal.sample(&mut self.rng_imu);
                     *v += extra * n;
                 }
-                FaultKind::ScaleFactor(s) => *v += s * truth.imu.get(r.channel).copied().unwrap_or(0.0),
+                FaultKind::ScaleFactor(s) => {
+                    *v += s * truth.imu.get(r.channel).copied().unwrap_or(0.0)
+                }
                 _ => {}
             }
         }
@@ -169,7 +176,9 @@ impl Iterator for Simulator {
             let s = self.scenario.aiding.vel_sigma;
             for i in 0..3 {
                 let n = self.gauss();
-                if let (Some(a), Some(ok), Some(vi)) = (aiding.get_mut(i), avail.get_mut(i), v.get(i)) {
+                if let (Some(a), Some(ok), Some(vi)) =
+                    (aiding.get_mut(i), avail.get_mut(i), v.get(i))
+                {
                     *a = vi + s * n;
                     *ok = true;
                 }
@@ -180,7 +189,10 @@ impl Iterator for Simulator {
             for i in 0..3 {
                 let n = self.gauss();
                 if let (Some(a), Some(ok)) = (aiding.get_mut(3 + i), avail.get_mut(3 + i)) {
-                    *a = wrap_pi_f64(truth.state.get(3 + i).copied().unwrap_or(0.0) + sig.get(i).copied().unwrap_or(0.0) * n);
+                    *a = wrap_pi_f64(
+                        truth.state.get(3 + i).copied().unwrap_or(0.0)
+                            + sig.get(i).copied().unwrap_or(0.0) * n,
+                    );
                     *ok = true;
                 }
             }

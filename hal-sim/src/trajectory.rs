@@ -43,17 +43,28 @@ struct Signal {
 
 impl Signal {
     fn value(&self, t: f64) -> f64 {
-        self.c + self.terms.iter().map(|(a, w, p)| a * libm::sin(w * t + p)).sum::<f64>()
+        self.c
+            + self
+                .terms
+                .iter()
+                .map(|(a, w, p)| a * libm::sin(w * t + p))
+                .sum::<f64>()
     }
     fn rate(&self, t: f64) -> f64 {
-        self.terms.iter().map(|(a, w, p)| a * w * libm::cos(w * t + p)).sum()
+        self.terms
+            .iter()
+            .map(|(a, w, p)| a * w * libm::cos(w * t + p))
+            .sum()
     }
 }
 
 /// Builds a signal from nominal (amplitude, period) pairs, randomising
 /// amplitude ±30 %, period ±20 % and phase.
 fn signal(rng: &mut Xoshiro256PlusPlus, c: f64, spec: &[(f64, f64)]) -> Signal {
-    let mut s = Signal { c, ..Signal::default() };
+    let mut s = Signal {
+        c,
+        ..Signal::default()
+    };
     for (slot, (amp, period)) in s.terms.iter_mut().zip(spec.iter()) {
         let a = amp * rng.random_range(0.7..1.3);
         let p = period * rng.random_range(0.8..1.2);
@@ -137,7 +148,14 @@ impl Trajectory {
         let ay = dv - (-u * r + w * p + g * ct * sp);
         let az = dw - (u * q - v * p + g * ct * cp);
         Truth {
-            state: [u, v, w, imu_fdi::math::wrap_pi_f64(phi), th, imu_fdi::math::wrap_pi_f64(psi)],
+            state: [
+                u,
+                v,
+                w,
+                imu_fdi::math::wrap_pi_f64(phi),
+                th,
+                imu_fdi::math::wrap_pi_f64(psi),
+            ],
             imu: [ax, ay, az, p, q, r],
         }
     }
@@ -158,7 +176,8 @@ mod tests {
             let mut x = StateVec::from(traj.at(0.0).state);
             let dt = 0.001;
             for k in 0..60_000 {
-                let u = ImuVec::from(traj.at(k as f64 * dt).imu);
+                // Input at the step midpoint: the model holds it over the step.
+                let u = ImuVec::from(traj.at((k as f64 + 0.5) * dt).imu);
                 x = model.step(&x, &u, dt).unwrap();
             }
             let truth = StateVec::from(traj.at(60.0).state);

@@ -1,3 +1,7 @@
+// Dense fixed-size kernel: every index below is a loop variable bounded by
+// the matrix's own const dimension, so no index can be out of range.
+#![allow(clippy::indexing_slicing)]
+
 use crate::math::Real;
 use crate::model::{ImuVec, Mat6};
 
@@ -45,7 +49,12 @@ pub fn paper_matrix<T: Real>(table: &[[i8; 6]; 6]) -> Mat6<T> {
 /// `innovation_sigma` (so that the comparison is in units of innovation
 /// noise); then entries below `deadband` × the largest entry of their row
 /// become 0, e.g. the `v·r` and `w·q` couplings when v, w ≈ 0.
-pub fn runtime_sign_matrix<T: Real>(m: &Mat6<T>, fault_scale: &ImuVec<T>, innovation_sigma: &ImuVec<T>, deadband: T) -> Mat6<T> {
+pub fn runtime_sign_matrix<T: Real>(
+    m: &Mat6<T>,
+    fault_scale: &ImuVec<T>,
+    innovation_sigma: &ImuVec<T>,
+    deadband: T,
+) -> Mat6<T> {
     let mut c = Mat6::zeros();
     for i in 0..6 {
         let mut scaled = [T::zero(); 6];

@@ -1,3 +1,7 @@
+// Dense fixed-size kernel: every index below is a loop variable bounded by
+// the matrix's own const dimension, so no index can be out of range.
+#![allow(clippy::indexing_slicing)]
+
 use crate::math::{cholesky, cholesky_solve_right, Real};
 use crate::model::{ImuVec, Mat6};
 
@@ -31,7 +35,13 @@ impl<T: Real> Default for GlrResult<T> {
 /// `λ ≥ threshold` (up to `max_faults`), and the sizes of all chosen channels
 /// are re-estimated jointly by weighted least squares each round — so three
 /// simultaneous faults (S2) are isolated as three channels.
-pub fn glr_isolate<T: Real>(m: &Mat6<T>, rbar: &ImuVec<T>, w: &ImuVec<T>, threshold: T, max_faults: usize) -> GlrResult<T> {
+pub fn glr_isolate<T: Real>(
+    m: &Mat6<T>,
+    rbar: &ImuVec<T>,
+    w: &ImuVec<T>,
+    threshold: T,
+    max_faults: usize,
+) -> GlrResult<T> {
     let mut chosen = [false; 6];
     let mut out = GlrResult::<T>::default();
     let mut residual = *rbar;
@@ -50,7 +60,7 @@ pub fn glr_isolate<T: Real>(m: &Mat6<T>, rbar: &ImuVec<T>, w: &ImuVec<T>, thresh
             }
             if b > T::zero() {
                 let lambda = a * a / b;
-                if best.map_or(true, |(_, l)| lambda > l) {
+                if best.is_none_or(|(_, l)| lambda > l) {
                     best = Some((j, lambda));
                 }
             }
@@ -71,7 +81,8 @@ pub fn glr_isolate<T: Real>(m: &Mat6<T>, rbar: &ImuVec<T>, w: &ImuVec<T>, thresh
         let mut rhs = nalgebra::SMatrix::<T, 1, 6>::zeros();
         for a in 0..6 {
             for b in 0..6 {
-                let both = chosen.get(a).copied().unwrap_or(false) && chosen.get(b).copied().unwrap_or(false);
+                let both = chosen.get(a).copied().unwrap_or(false)
+                    && chosen.get(b).copied().unwrap_or(false);
                 if both {
                     let mut s = T::zero();
                     for i in 0..6 {
@@ -95,7 +106,12 @@ pub fn glr_isolate<T: Real>(m: &Mat6<T>, rbar: &ImuVec<T>, w: &ImuVec<T>, thresh
         out.estimate = f;
         residual = rbar - m * f;
     }
-    for ((s, c), f) in out.signs.iter_mut().zip(chosen.iter()).zip(out.estimate.iter()) {
+    for ((s, c), f) in out
+        .signs
+        .iter_mut()
+        .zip(chosen.iter())
+        .zip(out.estimate.iter())
+    {
         if *c {
             *s = if *f > T::zero() { 1 } else { -1 };
         }

@@ -9,7 +9,10 @@ mod persistence;
 mod ttest;
 mod window;
 
-pub use decouple::{decouple_flags, paper_matrix, runtime_sign_matrix, PAPER_MATRIX_AS_PRINTED, PAPER_MATRIX_CORRECTED};
+pub use decouple::{
+    decouple_flags, paper_matrix, runtime_sign_matrix, PAPER_MATRIX_AS_PRINTED,
+    PAPER_MATRIX_CORRECTED,
+};
 pub use estimator::{estimate_as_written, estimate_corrected};
 pub use glr::{glr_isolate, GlrResult};
 pub use persistence::Persistence;

@@ -36,7 +36,9 @@ impl<T: Real, const N: usize> InnovationWindow<T, N> {
     /// An empty window.
     pub fn new() -> Self {
         const { assert!(N >= 3, "a t-test window needs at least 3 samples") };
-        Self { buf: HistoryBuf::new() }
+        Self {
+            buf: HistoryBuf::new(),
+        }
     }
     /// Appends a sample, dropping the oldest when full.
     pub fn push(&mut self, x: T) {

@@ -50,7 +50,7 @@ impl<T: Real, const M: usize> Gate<T, M> {
         let Some(run) = self.run.get_mut(channel) else {
             return false;
         };
-        if !(self.sigma > T::zero()) || test_ratio <= T::one() {
+        if self.sigma <= T::zero() || !self.sigma.finite() || test_ratio <= T::one() {
             *run = 0;
             return true;
         }

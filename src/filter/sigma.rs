@@ -45,7 +45,7 @@ impl<T: Real, const S: usize> SigmaWeights<T, S> {
         let n = ((S - 1) / 2) as f64;
         let lambda = p.alpha * p.alpha * (n + p.kappa) - n;
         let c = n + lambda;
-        if !(c > 0.0) || !(p.alpha > 0.0) {
+        if c.is_nan() || c <= 0.0 || p.alpha.is_nan() || p.alpha <= 0.0 {
             return None;
         }
         let wi = 1.0 / (2.0 * c);
@@ -73,7 +73,11 @@ mod tests {
         assert!((w.wm.iter().sum::<f64>() - 1.0).abs() < 1e-15);
         assert_eq!(w.wc[0], 2.0);
         assert!((w.gamma - 6f64.sqrt()).abs() < 1e-15);
-        let bad = SigmaParams { alpha: 0.1, beta: 2.0, kappa: -7.0 };
+        let bad = SigmaParams {
+            alpha: 0.1,
+            beta: 2.0,
+            kappa: -7.0,
+        };
         assert!(SigmaWeights::<f64, 13>::new(&bad).is_none());
     }
 }

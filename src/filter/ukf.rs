@@ -58,7 +58,11 @@ pub struct Ukf<T, const N: usize, const S: usize> {
     resets: u32,
 }
 
-fn diff<T: Real, const K: usize>(a: &SVector<T, K>, b: &SVector<T, K>, angles: &[bool; K]) -> SVector<T, K> {
+fn diff<T: Real, const K: usize>(
+    a: &SVector<T, K>,
+    b: &SVector<T, K>,
+    angles: &[bool; K],
+) -> SVector<T, K> {
     let mut d = a - b;
     for (v, is_angle) in d.iter_mut().zip(angles.iter()) {
         if *is_angle {
@@ -93,7 +97,12 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
     /// A filter at `x0` with covariance `p0`, which is also the matrix `P`
     /// is reset to after a numerical failure. Returns `None` when the sigma
     /// parameters are unusable.
-    pub fn new(x0: SVector<T, N>, p0: SMatrix<T, N, N>, params: &SigmaParams, angles: [bool; N]) -> Option<Self> {
+    pub fn new(
+        x0: SVector<T, N>,
+        p0: SMatrix<T, N, N>,
+        params: &SigmaParams,
+        angles: [bool; N],
+    ) -> Option<Self> {
         const { assert!(S == 2 * N + 1, "S must be 2N + 1") };
         let weights = SigmaWeights::new(params)?;
         Some(Self {
@@ -157,11 +166,9 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
                 // The reset matrix is a configuration value checked at start-up;
                 // should it fail too, fall back to its diagonal.
                 let l = cholesky(&self.p).unwrap_or_else(|_| {
-                    let mut d = SMatrix::<T, N, N>::zeros();
-                    for i in 0..N {
-                        d[(i, i)] = self.p_reset[(i, i)].abs().sqrt_fast();
-                    }
-                    d
+                    SMatrix::<T, N, N>::from_diagonal(
+                        &self.p_reset.diagonal().map(|v| v.abs().sqrt_fast()),
+                    )
                 });
                 (l, Some(e))
             }
@@ -170,10 +177,11 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
 
     fn condition(&mut self) {
         symmetrize(&mut self.p);
-        for i in 0..N {
-            let floor = self.min_variance[i];
-            if self.p[(i, i)] < floor {
-                self.p[(i, i)] = floor;
+        for (i, floor) in self.min_variance.iter().enumerate() {
+            if let Some(pii) = self.p.get_mut((i, i)) {
+                if *pii < *floor {
+                    *pii = *floor;
+                }
             }
         }
     }
@@ -246,8 +254,8 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
             if !available.get(i).copied().unwrap_or(false) {
                 continue;
             }
-            let s = pzz[(i, i)];
-            let innovation = nu_all[i];
+            let s = pzz.get((i, i)).copied().unwrap_or_else(T::one);
+            let innovation = nu_all.get(i).copied().unwrap_or_else(T::zero);
             let ratio = gate.ratio(innovation, s);
             let fused = innovation.finite() && s > T::zero() && gate.admit(i, ratio);
             *d = ChannelDiag {
@@ -257,8 +265,8 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
                 test_ratio: ratio,
                 fused,
             };
-            if fused {
-                nu[i] = innovation;
+            if let (true, Some(n)) = (fused, nu.get_mut(i)) {
+                *n = innovation;
             }
         }
         // Channels not fused: decouple them (unit variance, no cross terms,
@@ -267,7 +275,9 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
             if !d.fused {
                 pzz.set_row(i, &nalgebra::SMatrix::<T, 1, M>::zeros());
                 pzz.set_column(i, &SVector::<T, M>::zeros());
-                pzz[(i, i)] = T::one();
+                if let Some(v) = pzz.get_mut((i, i)) {
+                    *v = T::one();
+                }
                 pxz.set_column(i, &SVector::<T, N>::zeros());
             }
         }

@@ -1,5 +1,13 @@
 use super::Real;
 
+/// 2π split as an exactly representable head (few mantissa bits, so `k·HEAD`
+/// is exact for |k| < 2¹⁶ in `f32`) plus a tail, so that wrapping does not
+/// add the `f32` rounding error of 2π (1.7e-7 rad) every time a sigma point
+/// crosses ±π — which, near a heading of ±π, would bias the filter's mean by
+/// that amount every step.
+const TWO_PI_HEAD: f64 = 6.281_25;
+const TWO_PI_TAIL: f64 = core::f64::consts::TAU - TWO_PI_HEAD;
+
 /// Wraps an angle to (−π, π]. Non-finite input is returned unchanged so that
 /// the caller's NaN check still sees it.
 #[inline]
@@ -8,15 +16,15 @@ pub fn wrap_pi<T: Real>(a: T) -> T {
         return a;
     }
     let pi = T::pi();
-    let two_pi = T::two_pi();
     if a > -pi && a <= pi {
         return a;
     }
-    let mut w = a % two_pi; // in (−2π, 2π)
+    let turns = (a / T::two_pi()).round();
+    let mut w = (a - turns * T::lit(TWO_PI_HEAD)) - turns * T::lit(TWO_PI_TAIL);
     if w > pi {
-        w -= two_pi;
+        w = (w - T::lit(TWO_PI_HEAD)) - T::lit(TWO_PI_TAIL);
     } else if w <= -pi {
-        w += two_pi;
+        w = (w + T::lit(TWO_PI_HEAD)) + T::lit(TWO_PI_TAIL);
     }
     w
 }

@@ -1,3 +1,7 @@
+// Dense fixed-size kernel: every index below is a loop variable bounded by
+// the matrix's own const dimension, so no index can be out of range.
+#![allow(clippy::indexing_slicing)]
+
 use nalgebra::{Matrix3, Vector3};
 
 use super::{Mat6, MeasVec, StateVec, NZ, PITCH, ROLL, YAW};
@@ -89,6 +93,18 @@ impl<T: Real> MeasurementModel<T> {
             }
         };
         MeasVec::new(v[0], v[1], v[2], x[ROLL], x[PITCH], x[YAW])
+    }
+
+    /// Rotates a measured sensor velocity into body axes using the attitude
+    /// in `x` (identity for M1, `R_nbᵀ v` for M2): used for alignment.
+    pub fn velocity_to_body(&self, x: &StateVec<T>, v: &Vector3<T>) -> Vector3<T> {
+        match self.kind {
+            AidingKind::DvlCompass => *v,
+            AidingKind::GnssAttitude => {
+                let (rx, ry, rz) = rotations(x);
+                (rz * ry * rx).transpose() * v
+            }
+        }
     }
 
     /// Measurement Jacobian `H = ∂h/∂x` at `x`.

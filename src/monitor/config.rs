@@ -1,7 +1,7 @@
 use crate::detect::{Detector, Statistic};
 use crate::filter::SigmaParams;
-use crate::model::{AidingKind, ImuNoisePsd, ImuVec, MeasVec, StateVec, G0};
 use crate::math::Real;
+use crate::model::{AidingKind, ImuNoisePsd, ImuVec, MeasVec, StateVec, G0};
 
 /// A configuration the monitor cannot run with.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -2,16 +2,17 @@ use nalgebra::Vector3;
 
 use super::{ChannelState, ConfigError, Health, Phase, Report, UkfMonitorConfig};
 use crate::detect::{
-    decouple_flags, estimate_as_written, estimate_corrected, glr_isolate, paper_matrix, runtime_sign_matrix, t_statistic,
-    Detector, InnovationWindow, Persistence, Statistic, TTest, PAPER_MATRIX_AS_PRINTED, PAPER_MATRIX_CORRECTED,
+    decouple_flags, estimate_as_written, estimate_corrected, glr_isolate, paper_matrix,
+    runtime_sign_matrix, t_statistic, Detector, InnovationWindow, Persistence, Statistic, TTest,
+    PAPER_MATRIX_AS_PRINTED, PAPER_MATRIX_CORRECTED,
 };
 use crate::filter::{ChannelDiag, Gate, Ukf, UkfError};
 use crate::math::Real;
-use crate::stats::normal_upper_quantile;
 use crate::model::{
-    discrete_process_noise, AidingKind, ImuVec, Mat6, Measurement, MeasurementModel, ModelError, StateVec, VehicleModel,
-    NX, NZ, PITCH, ROLL, STATE_ANGLES, YAW,
+    discrete_process_noise, ImuVec, Mat6, Measurement, MeasurementModel, ModelError, StateVec,
+    VehicleModel, NX, NZ, ROLL, STATE_ANGLES, YAW,
 };
+use crate::stats::normal_upper_quantile;
 
 /// Default window length (aiding epochs per t-test window).
 pub const DEFAULT_WINDOW: usize = 10;
@@ -71,12 +72,15 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let ttest = TTest::new(cfg.alpha, W).map_err(|_| ConfigError::TTest)?;
         let z_threshold = T::lit(normal_upper_quantile(cfg.alpha).map_err(|_| ConfigError::TTest)?);
         let p0 = Mat6::from_diagonal(&cfg.initial_sigma.component_mul(&cfg.initial_sigma));
-        let ukf = Ukf::new(StateVec::zeros(), p0, &cfg.sigma, STATE_ANGLES).ok_or(ConfigError::SigmaParams)?;
+        let ukf = Ukf::new(StateVec::zeros(), p0, &cfg.sigma, STATE_ANGLES)
+            .ok_or(ConfigError::SigmaParams)?;
         let mut meas = MeasurementModel::new(cfg.aiding);
         meas.lever_arm = Vector3::new(cfg.lever_arm[0], cfg.lever_arm[1], cfg.lever_arm[2]);
         let paper_inv = match cfg.detector {
             Detector::PaperMatrix => paper_matrix::<T>(&PAPER_MATRIX_CORRECTED).try_inverse(),
-            Detector::PaperMatrixAsPrinted => paper_matrix::<T>(&PAPER_MATRIX_AS_PRINTED).try_inverse(),
+            Detector::PaperMatrixAsPrinted => {
+                paper_matrix::<T>(&PAPER_MATRIX_AS_PRINTED).try_inverse()
+            }
             _ => None,
         };
         let mut ukf = ukf;
@@ -215,7 +219,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // --- measurement update --------------------------------------------
         let meas_ok = aiding.any();
         if meas_ok && !health.pitch_singular {
-            let omega = Vector3::new(imu[3], imu[4], imu[5]) - Vector3::new(self.nominal_bias[3], self.nominal_bias[4], self.nominal_bias[5]);
+            let omega: Vector3<T> = imu.fixed_rows::<3>(3) - self.nominal_bias.fixed_rows::<3>(3);
             match self.update(aiding, &omega) {
                 Ok((rejected, reset)) => {
                     updated = true;
@@ -241,43 +245,26 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     }
 
     fn try_align(&mut self, aiding: &Measurement<T>, imu: &ImuVec<T>) {
-        let att = aiding.available.get(ROLL..=YAW).is_some_and(|a| a.iter().all(|v| *v));
+        let att = aiding
+            .available
+            .get(ROLL..=YAW)
+            .is_some_and(|a| a.iter().all(|v| *v));
         if !att || !aiding.z.iter().skip(ROLL).all(|v| v.finite()) {
             return;
         }
         let mut x = StateVec::zeros();
-        x[ROLL] = aiding.z[ROLL];
-        x[PITCH] = aiding.z[PITCH];
-        x[YAW] = aiding.z[YAW];
+        x.fixed_rows_mut::<3>(ROLL)
+            .copy_from(&aiding.z.fixed_rows::<3>(ROLL));
         if self.model.check_attitude(&x).is_err() {
             return;
         }
-        let vel = aiding.available.iter().take(3).all(|v| *v) && aiding.z.iter().take(3).all(|v| v.finite());
+        let vel = aiding.available.iter().take(3).all(|v| *v)
+            && aiding.z.iter().take(3).all(|v| v.finite());
         if vel {
-            let v = Vector3::new(aiding.z[0], aiding.z[1], aiding.z[2]);
-            let omega = Vector3::new(imu[3], imu[4], imu[5]);
-            let v_sensor_body = match self.cfg.aiding {
-                AidingKind::DvlCompass => v,
-                AidingKind::GnssAttitude => {
-                    // Rotate NED → body with the measured attitude.
-                    let h = MeasurementModel::<T>::new(AidingKind::GnssAttitude);
-                    let mut xb = x;
-                    let mut out = Vector3::zeros();
-                    for k in 0..3 {
-                        xb[0] = if k == 0 { T::one() } else { T::zero() };
-                        xb[1] = if k == 1 { T::one() } else { T::zero() };
-                        xb[2] = if k == 2 { T::one() } else { T::zero() };
-                        let col = h.predict(&xb, &Vector3::zeros());
-                        // Column k of R_nb; body component k = (R_nb e_k) · v.
-                        out[k] = col[0] * v[0] + col[1] * v[1] + col[2] * v[2];
-                    }
-                    out
-                }
-            };
-            let v_imu = v_sensor_body - omega.cross(&self.meas.lever_arm);
-            x[0] = v_imu[0];
-            x[1] = v_imu[1];
-            x[2] = v_imu[2];
+            let v: Vector3<T> = aiding.z.fixed_rows::<3>(0).into_owned();
+            let omega: Vector3<T> = imu.fixed_rows::<3>(3).into_owned();
+            let v_imu = self.meas.velocity_to_body(&x, &v) - omega.cross(&self.meas.lever_arm);
+            x.fixed_rows_mut::<3>(0).copy_from(&v_imu);
         }
         let s = self.cfg.initial_sigma;
         self.ukf.reset(x, Mat6::from_diagonal(&s.component_mul(&s)));
@@ -303,7 +290,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         Ok(reset)
     }
 
-    fn update(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>) -> Result<(bool, bool), UkfError<ModelError>> {
+    fn update(
+        &mut self,
+        aiding: &Measurement<T>,
+        omega: &Vector3<T>,
+    ) -> Result<(bool, bool), UkfError<ModelError>> {
         let x_prior = *self.ukf.state();
         let h = self.meas.jacobian(&x_prior, omega);
         let r = self.cfg.meas_sigma.component_mul(&self.cfg.meas_sigma);
@@ -312,9 +303,14 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         for (a, z) in available.iter_mut().zip(aiding.z.iter()) {
             *a = *a && z.finite();
         }
-        let out = self
-            .ukf
-            .update(&aiding.z, &available, |s| Ok(meas.predict(s, omega)), &r, &MEAS_ANGLES, &mut self.gate)?;
+        let out = self.ukf.update(
+            &aiding.z,
+            &available,
+            |s| Ok(meas.predict(s, omega)),
+            &r,
+            &MEAS_ANGLES,
+            &mut self.gate,
+        )?;
         let hx = h * self.sensitivity;
         let record = self.saturation_holdoff <= T::zero();
         let mut rejected = false;
@@ -328,12 +324,18 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             }
             let row = -hx.row(i);
             self.signature.set_row(i, &row);
-            self.latest_innovation[i] = d.innovation;
-            self.latest_variance[i] = d.variance;
+            if let Some(v) = self.latest_innovation.get_mut(i) {
+                *v = d.innovation;
+            }
+            if let Some(v) = self.latest_variance.get_mut(i) {
+                *v = d.variance;
+            }
             if record && d.fused {
                 let v = match self.cfg.statistic {
                     Statistic::Raw => d.innovation,
-                    Statistic::Whitened | Statistic::Normalized => d.innovation / d.variance.sqrt_fast(),
+                    Statistic::Whitened | Statistic::Normalized => {
+                        d.innovation / d.variance.sqrt_fast()
+                    }
                 };
                 if let Some(w) = self.windows.get_mut(i) {
                     w.push(v);
@@ -350,7 +352,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     fn window_scale(&self) -> ImuVec<T> {
         match self.cfg.statistic {
             Statistic::Raw => ImuVec::from_element(T::one()),
-            Statistic::Whitened | Statistic::Normalized => self.latest_variance.map(|v| T::one() / v.sqrt_fast()),
+            Statistic::Whitened | Statistic::Normalized => {
+                self.latest_variance.map(|v| T::one() / v.sqrt_fast())
+            }
         }
     }
 
@@ -358,7 +362,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let dt_learn = self.phase_time - self.learn_clock;
         self.learn_clock = self.phase_time;
         let w_inst = self.latest_variance.map(|v| T::one() / v);
-        let instant = estimate_corrected(&self.signature, &w_inst, &self.latest_innovation);
+        let instant = estimate_corrected(
+            &self.signature,
+            &w_inst,
+            &self.latest_innovation,
+            &[true; NZ],
+        );
         match self.phase {
             Phase::Learning => {
                 if let Some(f) = instant {
@@ -368,15 +377,21 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             }
             Phase::Monitoring => {
                 self.detect(health);
-                let quiet = self.report.status.iter().all(|s| !matches!(s, ChannelState::FaultNegative | ChannelState::FaultPositive))
-                    && self
-                        .report
-                        .t_statistic
-                        .iter()
-                        .all(|t| t.abs() < self.t_threshold() * T::lit(0.5));
+                let quiet = self.report.status.iter().all(|s| {
+                    !matches!(s, ChannelState::FaultNegative | ChannelState::FaultPositive)
+                }) && self
+                    .report
+                    .t_statistic
+                    .iter()
+                    .all(|t| t.abs() < self.t_threshold() * T::lit(0.5));
                 if let (true, Some(f)) = (quiet, instant) {
                     let k = dt_learn / self.cfg.drift_tau_s;
-                    for ((b, df), lim) in self.nominal_bias.iter_mut().zip(f.iter()).zip(self.cfg.drift_rate_limit.iter()) {
+                    for ((b, df), lim) in self
+                        .nominal_bias
+                        .iter_mut()
+                        .zip(f.iter())
+                        .zip(self.cfg.drift_rate_limit.iter())
+                    {
                         let step = *df * k;
                         let cap = *lim * dt_learn;
                         *b += step.max(-cap).min(cap);
@@ -392,34 +407,41 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     }
 
     fn detect(&mut self, _health: &Health) {
-        let mut flags = [0i8; NZ];
-        let mut tstat = [T::zero(); NZ];
-        let mut rbar = ImuVec::<T>::zeros();
-        let mut weight = ImuVec::<T>::zeros();
-        let mut full = [false; NZ];
         let threshold = self.t_threshold();
-        for (i, w) in self.windows.iter().enumerate() {
+        // Per innovation channel with a full window: (statistic, mean, variance of the mean).
+        let stats: [Option<(T, T, T)>; NZ] = core::array::from_fn(|i| {
+            let w = self.windows.get(i)?;
             if !w.is_full() {
-                continue;
+                return None;
             }
-            let Some(s) = w.stats() else { continue };
+            let s = w.stats()?;
             let n = T::lit(s.n as f64);
-            let (t, var_mean) = match self.cfg.statistic {
-                Statistic::Normalized => (s.mean * n.sqrt_fast(), T::one() / n),
-                _ => (t_statistic(&s), s.std * s.std / n),
-            };
-            full[i] = true;
-            tstat[i] = t;
-            flags[i] = if t >= threshold {
-                1
+            Some(match self.cfg.statistic {
+                Statistic::Normalized => (s.mean * n.sqrt_fast(), s.mean, T::one() / n),
+                _ => (t_statistic(&s), s.mean, s.std * s.std / n),
+            })
+        });
+        let full = stats.map(|s| s.is_some());
+        let tstat = stats.map(|s| s.map_or(T::zero(), |v| v.0));
+        let flags = tstat.map(|t| {
+            if t >= threshold {
+                1i8
             } else if t <= -threshold {
                 -1
             } else {
                 0
-            };
-            rbar[i] = s.mean;
-            weight[i] = if var_mean > T::zero() { T::one() / var_mean } else { T::zero() };
-        }
+            }
+        });
+        let rbar = ImuVec::from_iterator(stats.iter().map(|s| s.map_or(T::zero(), |v| v.1)));
+        let weight = ImuVec::from_iterator(stats.iter().map(|s| {
+            s.map_or(T::zero(), |v| {
+                if v.2 > T::zero() {
+                    T::one() / v.2
+                } else {
+                    T::zero()
+                }
+            })
+        }));
         let scale = self.window_scale();
         let mut m_eff = self.signature;
         for (i, s) in scale.iter().enumerate() {
@@ -429,11 +451,17 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let decision = match self.cfg.detector {
             Detector::Threshold => {
                 let mut d = [0i8; NZ];
-                for (j, dj) in d.iter_mut().enumerate() {
-                    let mjj = m_eff[(j, j)];
-                    if flags[j] != 0 && mjj != T::zero() {
-                        let f = rbar[j] / mjj;
-                        if f.abs() > self.cfg.min_fault[j] * self.cfg.threshold_fraction {
+                let diag = m_eff.diagonal();
+                for ((((dj, fl), r), mjj), mf) in d
+                    .iter_mut()
+                    .zip(flags.iter())
+                    .zip(rbar.iter())
+                    .zip(diag.iter())
+                    .zip(self.cfg.min_fault.iter())
+                {
+                    if *fl != 0 && *mjj != T::zero() {
+                        let f = *r / *mjj;
+                        if f.abs() > *mf * self.cfg.threshold_fraction {
                             *dj = if f > T::zero() { 1 } else { -1 };
                         }
                     }
@@ -445,8 +473,19 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 None => [0; NZ],
             },
             Detector::RuntimeMatrix => {
-                let sigma = weight.map(|w| if w > T::zero() { T::one() / w.sqrt_fast() } else { T::zero() });
-                let c = runtime_sign_matrix(&m_eff, &self.cfg.min_fault, &sigma, self.cfg.sign_deadband);
+                let sigma = weight.map(|w| {
+                    if w > T::zero() {
+                        T::one() / w.sqrt_fast()
+                    } else {
+                        T::zero()
+                    }
+                });
+                let c = runtime_sign_matrix(
+                    &m_eff,
+                    &self.cfg.min_fault,
+                    &sigma,
+                    self.cfg.sign_deadband,
+                );
                 match c.try_inverse() {
                     Some(ci) => decouple_flags(&ci, &flags).0,
                     None => [0; NZ],
@@ -469,14 +508,28 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         let out = self.persistence.update(&masked);
         // Estimates from the window means.
-        let est = estimate_corrected(&m_eff, &weight, &rbar).unwrap_or_else(ImuVec::zeros);
+        let est =
+            estimate_corrected(&m_eff, &weight, &rbar, &monitored).unwrap_or_else(ImuVec::zeros);
         let raw_mean = rbar.component_div(&scale.map(|s| if s > T::zero() { s } else { T::one() }));
-        let as_written = estimate_as_written(&self.last_h, &self.last_input_b, self.last_dt, &raw_mean).unwrap_or_else(ImuVec::zeros);
-        for (i, st) in self.report.status.iter_mut().enumerate() {
-            *st = if !monitored[i] {
+        let mut as_written =
+            estimate_as_written(&self.last_h, &self.last_input_b, self.last_dt, &raw_mean)
+                .unwrap_or_else(ImuVec::zeros);
+        for (v, m) in as_written.iter_mut().zip(monitored.iter()) {
+            if !*m {
+                *v = T::zero();
+            }
+        }
+        for ((st, mon), o) in self
+            .report
+            .status
+            .iter_mut()
+            .zip(monitored.iter())
+            .zip(out.iter())
+        {
+            *st = if !*mon {
                 ChannelState::NotMonitored
             } else {
-                match out[i] {
+                match *o {
                     1 => ChannelState::FaultPositive,
                     -1 => ChannelState::FaultNegative,
                     _ => ChannelState::Healthy,
@@ -524,10 +577,18 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         r.health = health;
         r.updated = updated;
         r.state = *self.ukf.state();
-        r.state_sigma = self.ukf.covariance().diagonal().map(|v| v.max(T::zero()).sqrt_fast());
+        r.state_sigma = self
+            .ukf
+            .covariance()
+            .diagonal()
+            .map(|v| v.max(T::zero()).sqrt_fast());
         r.nominal_bias = self.nominal_bias;
         let mut corrected = imu - self.nominal_bias;
-        for ((c, s), f) in corrected.iter_mut().zip(r.status.iter()).zip(r.fault_estimate.iter()) {
+        for ((c, s), f) in corrected
+            .iter_mut()
+            .zip(r.status.iter())
+            .zip(r.fault_estimate.iter())
+        {
             if matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative) {
                 *c -= *f;
             }

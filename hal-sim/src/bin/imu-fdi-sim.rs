@@ -11,7 +11,11 @@ use imu_fdi::detect::{Detector, Statistic};
 use imu_fdi::monitor::UkfMonitorConfig;
 
 #[derive(Parser)]
-#[command(name = "imu-fdi-sim", version, about = "Simulate, replay and score the imu-fdi monitors")]
+#[command(
+    name = "imu-fdi-sim",
+    version,
+    about = "Simulate, replay and score the imu-fdi monitors"
+)]
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,
@@ -129,7 +133,9 @@ fn default_detector(name: &str) -> Detector {
 
 fn options(name: &str, d: &DetectOpts) -> RunOptions {
     RunOptions {
-        detector: d.detector.map_or_else(|| default_detector(name), Detector::from),
+        detector: d
+            .detector
+            .map_or_else(|| default_detector(name), Detector::from),
         statistic: match d.statistic {
             StatisticArg::Raw => Statistic::Raw,
             StatisticArg::Whitened => Statistic::Whitened,
@@ -142,19 +148,39 @@ fn options(name: &str, d: &DetectOpts) -> RunOptions {
 fn campaign(scn: &Scenario, first: u64, seeds: u64, opts: &RunOptions) -> Result<RunMetrics> {
     let mut total = RunMetrics::default();
     for seed in first..first + seeds {
-        let trace = run::<f32>(scn, seed, opts).map_err(|e| anyhow!("monitor configuration: {e:?}"))?;
+        let trace =
+            run::<f32>(scn, seed, opts).map_err(|e| anyhow!("monitor configuration: {e:?}"))?;
         total.merge(&evaluate(&trace));
     }
     Ok(total)
 }
 
 fn scenario(name: &str) -> Result<Scenario> {
-    Scenario::builtin(name).ok_or_else(|| anyhow!("unknown scenario '{name}'; built-ins: {}", Scenario::BUILTIN.join(", ")))
+    Scenario::builtin(name).ok_or_else(|| {
+        anyhow!(
+            "unknown scenario '{name}'; built-ins: {}",
+            Scenario::BUILTIN.join(", ")
+        )
+    })
 }
 
-fn print_run(title: &str, scn: &Scenario, first: u64, seeds: u64, opts: &RunOptions) -> Result<RunMetrics> {
+fn print_run(
+    title: &str,
+    scn: &Scenario,
+    first: u64,
+    seeds: u64,
+    opts: &RunOptions,
+) -> Result<RunMetrics> {
     let m = campaign(scn, first, seeds, opts)?;
-    println!("== {title}: {} seeds {}..{}, detector {:?}, statistic {:?}, α = {:e} (f32 monitor)", scn.name, first, first + seeds - 1, opts.detector, opts.statistic, opts.alpha);
+    println!(
+        "== {title}: {} seeds {}..{}, detector {:?}, statistic {:?}, α = {:e} (f32 monitor)",
+        scn.name,
+        first,
+        first + seeds - 1,
+        opts.detector,
+        opts.statistic,
+        opts.alpha
+    );
     print!("{}", m.table());
     println!();
     Ok(m)
@@ -163,11 +189,19 @@ fn print_run(title: &str, scn: &Scenario, first: u64, seeds: u64, opts: &RunOpti
 fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.cmd {
-        Cmd::Scenario { name, seed, seeds, detect, json, trace } => {
+        Cmd::Scenario {
+            name,
+            seed,
+            seeds,
+            detect,
+            json,
+            trace,
+        } => {
             let scn = scenario(&name)?;
             let opts = options(&name, &detect);
             if let Some(p) = trace {
-                let t = run::<f32>(&scn, seed, &opts).map_err(|e| anyhow!("monitor configuration: {e:?}"))?;
+                let t = run::<f32>(&scn, seed, &opts)
+                    .map_err(|e| anyhow!("monitor configuration: {e:?}"))?;
                 t.write_csv(&p)?;
                 println!("wrote trace of seed {seed} to {}", p.display());
             }
@@ -182,24 +216,59 @@ fn main() -> Result<()> {
             let s1 = scenario("s1")?;
             let s2 = scenario("s2")?;
             let base = RunOptions::default();
-            let a = print_run("S1, threshold method", &s1, 1, seeds, &RunOptions { detector: Detector::Threshold, ..base })?;
+            let a = print_run(
+                "S1, threshold method",
+                &s1,
+                1,
+                seeds,
+                &RunOptions {
+                    detector: Detector::Threshold,
+                    ..base
+                },
+            )?;
             let b = print_run("S2, run-time matrix + GLR (default)", &s2, 1, seeds, &base)?;
-            let c = print_run("S2, paper's fixed matrix (erratum applied), for comparison", &s2, 1, seeds, &RunOptions { detector: Detector::PaperMatrix, ..base })?;
-            println!("summary: S1 false alarms {}, S2 false alarms {}, S2 paper-matrix false alarms {}", a.total_false_alarms(), b.total_false_alarms(), c.total_false_alarms());
+            let c = print_run(
+                "S2, paper's fixed matrix (erratum applied), for comparison",
+                &s2,
+                1,
+                seeds,
+                &RunOptions {
+                    detector: Detector::PaperMatrix,
+                    ..base
+                },
+            )?;
+            println!(
+                "summary: S1 false alarms {}, S2 false alarms {}, S2 paper-matrix false alarms {}",
+                a.total_false_alarms(),
+                b.total_false_alarms(),
+                c.total_false_alarms()
+            );
         }
         Cmd::Simulate { name, seed, out } => {
             let scn = scenario(&name)?;
             let n = hal_sim::replay::write_simulated(&scn, seed, &out)?;
-            println!("wrote {n} rows of {} (seed {seed}) to {}", scn.name, out.display());
+            println!(
+                "wrote {n} rows of {} (seed {seed}) to {}",
+                scn.name,
+                out.display()
+            );
         }
-        Cmd::Replay { input, out, summary, detect } => {
+        Cmd::Replay {
+            input,
+            out,
+            summary,
+            detect,
+        } => {
             let opts = options("replay", &detect);
             let mut cfg: UkfMonitorConfig<f64> = monitor_config(&Scenario::s2(), &opts);
             cfg.detector = opts.detector;
             let s = hal_sim::replay::replay(&input, out.as_deref(), summary.as_deref(), cfg)?;
             println!("replayed {} rows ({} skipped, {} IMU rows rejected), aiding {}, monitoring from {:?} s", s.rows, s.skipped_rows, s.rejected_imu_rows, s.aiding, s.monitoring_from_s);
             for c in &s.channels {
-                println!("  {:<3} flagged {:>6} samples, first at {:?} s", c.channel, c.flagged_samples, c.first_detection_s);
+                println!(
+                    "  {:<3} flagged {:>6} samples, first at {:?} s",
+                    c.channel, c.flagged_samples, c.first_detection_s
+                );
             }
             if let Some(p) = out {
                 println!("wrote {}", p.display());
