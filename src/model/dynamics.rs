@@ -231,7 +231,7 @@ mod tests {
     #[test]
     fn step_wraps_yaw() {
         let m = VehicleModel::<f64>::default();
-        let x = StateVec::new(0.0, 0.0, 0.0, 0.0, 0.0, 3.13);
+        let x = StateVec::new(0.0, 0.0, 0.0, 0.0, 0.0, core::f64::consts::PI - 0.005);
         let u = ImuVec::new(0.0, 0.0, -super::super::G0, 0.0, 0.0, 1.0);
         let n = m.step(&x, &u, 0.01).unwrap();
         assert!(n[YAW] < -3.0);
