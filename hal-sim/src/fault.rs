@@ -1,4 +1,4 @@
-//! Fault injection: the papers' fault shapes (E1–E3 of [UKF], F1–F3 of [OTS])
+//! Fault injection: the papers' fault shapes (E1–E3 of \[UKF\], F1–F3 of \[OTS\])
 //! and the hardware faults of S5, described as table rows.
 
 use core::f64::consts::PI;
@@ -7,17 +7,17 @@ use core::f64::consts::PI;
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "std", derive(serde::Serialize, serde::Deserialize))]
 pub enum FaultKind {
-    /// [UKF] E1: step `a`.
+    /// \[UKF\] E1: step `a`.
     E1,
-    /// [UKF] E2: ramp `b (t − t₀)`.
+    /// \[UKF\] E2: ramp `b (t − t₀)`.
     E2,
-    /// [UKF] E3: `c sin(0.005π (t − t₀))` (400 s period: a slow ramp at first).
+    /// \[UKF\] E3: `c sin(0.005π (t − t₀))` (400 s period: a slow ramp at first).
     E3,
-    /// [OTS] F1: step 1 (× the table's unit scale).
+    /// \[OTS\] F1: step 1 (× the table's unit scale).
     F1,
-    /// [OTS] F2: ramp `0.1 (t − t₀)`.
+    /// \[OTS\] F2: ramp `0.1 (t − t₀)`.
     F2,
-    /// [OTS] F3: `sin(0.5π (t − t₀))`.
+    /// \[OTS\] F3: `sin(0.5π (t − t₀))`.
     F3,
     /// S5: output stuck at the last good value.
     Stuck,
@@ -33,7 +33,7 @@ pub enum FaultKind {
     ScaleFactor(f64),
 }
 
-/// Sizes of the [UKF] shapes per channel kind (SPEC §8 leaves a, b, c open).
+/// Sizes of the \[UKF\] shapes per channel kind (SPEC §8 leaves a, b, c open).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "std", derive(serde::Serialize, serde::Deserialize))]
 pub struct FaultSizes {
@@ -41,7 +41,7 @@ pub struct FaultSizes {
     pub accel: [f64; 3],
     /// Gyro `[a rad/s, b rad/s², c rad/s]`.
     pub gyro: [f64; 3],
-    /// Unit of the [OTS] F1–F3 shapes: `[accel, gyro]` (1 m/s² and e.g.
+    /// Unit of the \[OTS\] F1–F3 shapes: `[accel, gyro]` (1 m/s² and e.g.
     /// 1 °/s = 0.01745 rad/s: the paper does not state gyro units).
     pub f_unit: [f64; 2],
 }

@@ -61,11 +61,16 @@ fn parse_opt(rec: &csv::StringRecord, idx: Option<usize>) -> Option<f64> {
 
 /// Replays `input` through a monitor configured by `cfg` (its aiding kind is
 /// overridden by the columns present) and writes `out` / `summary`.
+///
+/// With truth columns, flags within `grace_s` after the last fault-active row
+/// count neither as false alarms nor as detections (the window is flushing),
+/// as in the scenario metrics.
 pub fn replay(
     input: &Path,
     out: Option<&Path>,
     summary: Option<&Path>,
     mut cfg: UkfMonitorConfig<f64>,
+    grace_s: f64,
 ) -> Result<ReplaySummary> {
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
@@ -137,6 +142,7 @@ pub fn replay(
         ..Default::default()
     };
     let mut last_t: Option<f64> = None;
+    let mut last_fault_t = f64::NEG_INFINITY;
     let mut nominal_dt = monitor.config().imu_period;
     for (line, rec) in rdr.records().enumerate() {
         let rec =
@@ -188,6 +194,13 @@ pub fn replay(
                 .map(|i| parse_opt(&rec, *i).unwrap_or(0.0))
                 .collect()
         });
+        let any_fault = truth
+            .as_ref()
+            .is_some_and(|tr| tr.iter().any(|v| *v != 0.0));
+        if any_fault {
+            last_fault_t = t;
+        }
+        let in_grace = !any_fault && t - last_fault_t < grace_s;
         for (i, ch) in sum.channels.iter_mut().enumerate() {
             let flag = r.status[i].sign();
             let flagged = flag.is_some_and(|f| f != 0);
@@ -201,7 +214,7 @@ pub fn replay(
                     *ch.fault_samples.get_or_insert(0) += 1;
                     let want = if fv > 0.0 { 1 } else { -1 };
                     *ch.correct_samples.get_or_insert(0) += usize::from(f == want);
-                } else if tr.iter().all(|v| *v == 0.0) && flagged {
+                } else if !any_fault && !in_grace && flagged {
                     *ch.false_alarm_samples.get_or_insert(0) += 1;
                 }
             }

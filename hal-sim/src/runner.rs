@@ -21,7 +21,7 @@ pub struct TraceRow {
     pub flag: [Option<i8>; 6],
     /// Fault estimate (corrected mapping).
     pub fhat: [f64; 6],
-    /// Fault estimate as written in [UKF] §4.
+    /// Fault estimate as written in \[UKF\] §4.
     pub fhat_as_written: [f64; 6],
     /// State estimate.
     pub state: [f64; 6],

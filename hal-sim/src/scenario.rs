@@ -125,7 +125,7 @@ const fn row(channel: usize, start: f64, end: f64, kind: FaultKind, sign: f64) -
     }
 }
 
-/// [UKF] Table 1 (threshold method):
+/// \[UKF\] Table 1 (threshold method):
 /// `a_x 11–16 E2; a_y 17–23 E1; a_z 24–29 E1; p 41–47 E3; q 48–52 −E1; r 53–59 E1`.
 pub const S1_TABLE: [FaultRow; 6] = [
     row(0, 11.0, 16.0, FaultKind::E2, 1.0),
@@ -136,7 +136,7 @@ pub const S1_TABLE: [FaultRow; 6] = [
     row(5, 53.0, 59.0, FaultKind::E1, 1.0),
 ];
 
-/// [UKF] Table 2 (decoupling method):
+/// \[UKF\] Table 2 (decoupling method):
 /// `a_x 11–20 E2; a_y 11–20 E1; a_z 11–20 E3; p 35–39 E2; q 50–58 E3; r 43–48 E1`.
 pub const S2_TABLE: [FaultRow; 6] = [
     row(0, 11.0, 20.0, FaultKind::E2, 1.0),
@@ -188,7 +188,7 @@ impl Scenario {
         }
     }
 
-    /// S1: [UKF] Table 1 on the AUV, 65 s.
+    /// S1: \[UKF\] Table 1 on the AUV, 65 s.
     pub fn s1() -> Self {
         Self {
             name: name("s1"),
@@ -197,7 +197,7 @@ impl Scenario {
         }
     }
 
-    /// S2: [UKF] Table 2 on the AUV, 65 s.
+    /// S2: \[UKF\] Table 2 on the AUV, 65 s.
     pub fn s2() -> Self {
         Self {
             name: name("s2"),

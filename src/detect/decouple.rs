@@ -5,7 +5,7 @@
 use crate::math::Real;
 use crate::model::{ImuVec, Mat6};
 
-/// [UKF] §3.2 sign matrix as printed: rows innovations `[r_u … r_ψ]`,
+/// \[UKF\] §3.2 sign matrix as printed: rows innovations `[r_u … r_ψ]`,
 /// columns faults `[f_ax … f_r]` (det = −2).
 #[rustfmt::skip]
 pub const PAPER_MATRIX_AS_PRINTED: [[i8; 6]; 6] = [

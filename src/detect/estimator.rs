@@ -5,7 +5,7 @@
 use crate::math::{cholesky, cholesky_solve_right, Real};
 use crate::model::{ImuVec, Mat6};
 
-/// [UKF] §4 as written: `f̂ = (H G_k)⁻¹ r̄` with `G_k = −B·dt` the fault-input
+/// \[UKF\] §4 as written: `f̂ = (H G_k)⁻¹ r̄` with `G_k = −B·dt` the fault-input
 /// matrix of the current IMU step (SPEC §6). Because the filter's own
 /// correction feeds back, the steady innovation of a constant fault is
 /// `M f`, not `H G_k f`, so this over-estimates by roughly `T/(K·dt)`

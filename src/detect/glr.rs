@@ -32,7 +32,10 @@ impl<T: Real> Default for GlrResult<T> {
 /// components (0 for channels not monitored), the best single fault channel
 /// maximises `λ_j = (m_jᵀ W r̃)² / (m_jᵀ W m_j)` where `r̃` is the residual
 /// left by the channels already chosen. Channels are added while
-/// `λ ≥ threshold` (up to `max_faults`), and the sizes of all chosen channels
+/// `λ ≥ threshold` and `λ ≥ relative × λ_first` (a further channel must
+/// explain a meaningful share of what the first did, not the few-percent
+/// mismatch a linearised `M` leaves under a large fault), up to `max_faults`;
+/// the sizes of all chosen channels
 /// are re-estimated jointly by weighted least squares each round — so three
 /// simultaneous faults (S2) are isolated as three channels.
 pub fn glr_isolate<T: Real>(
@@ -40,6 +43,7 @@ pub fn glr_isolate<T: Real>(
     rbar: &ImuVec<T>,
     w: &ImuVec<T>,
     threshold: T,
+    relative: T,
     max_faults: usize,
 ) -> GlrResult<T> {
     let mut chosen = [false; 6];
@@ -69,7 +73,7 @@ pub fn glr_isolate<T: Real>(
         if round == 0 {
             out.first_statistic = lambda;
         }
-        if lambda < threshold {
+        if lambda < threshold || (round > 0 && lambda < relative * out.first_statistic) {
             break;
         }
         if let Some(c) = chosen.get_mut(j) {
@@ -138,10 +142,10 @@ mod tests {
         let f = ImuVec::new(0.2, -0.1, 0.15, 0.0, 0.0, 0.0);
         let r = m * f;
         let w = ImuVec::repeat(1.0 / (0.003f64 * 0.003));
-        let g = glr_isolate(&m, &r, &w, 25.0, 6);
+        let g = glr_isolate(&m, &r, &w, 25.0, 0.0, 6);
         assert_eq!(g.signs, [1, -1, 1, 0, 0, 0]);
         assert!((g.estimate - f).amax() < 1e-12);
-        let g = glr_isolate(&m, &ImuVec::zeros(), &w, 25.0, 6);
+        let g = glr_isolate(&m, &ImuVec::zeros(), &w, 25.0, 0.0, 6);
         assert_eq!(g.signs, [0; 6]);
     }
 }

@@ -1,4 +1,4 @@
-//! Innovation-based fault detection ([UKF] §3, SPEC §5): ring-buffer windows,
+//! Innovation-based fault detection (\[UKF\] §3, SPEC §5): ring-buffer windows,
 //! the windowed t-test, the threshold and decoupling-matrix methods,
 //! signature-based (GLR) isolation, and the fault estimators of SPEC §6.
 
@@ -23,12 +23,12 @@ pub use window::{InnovationWindow, WindowStats};
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Detector {
-    /// [UKF] §3.1: IMU channel i ↔ innovation channel i, flagged when its
+    /// \[UKF\] §3.1: IMU channel i ↔ innovation channel i, flagged when its
     /// t-test fires and |window mean| exceeds the channel threshold.
     Threshold,
-    /// [UKF] §3.2 with the paper's fixed sign matrix (erratum applied).
+    /// \[UKF\] §3.2 with the paper's fixed sign matrix (erratum applied).
     PaperMatrix,
-    /// [UKF] §3.2 with the paper's matrix exactly as printed (a_x sign wrong).
+    /// \[UKF\] §3.2 with the paper's matrix exactly as printed (a_x sign wrong).
     PaperMatrixAsPrinted,
     /// `C⁻¹·flag` with `C` the dead-banded sign pattern of the closed-loop
     /// signature matrix `M`, rebuilt every update.

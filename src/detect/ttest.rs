@@ -21,7 +21,7 @@ pub fn t_statistic<T: Real>(s: &WindowStats<T>) -> T {
     }
 }
 
-/// The windowed one-sample t-test of [UKF] §3 with its quantile computed at
+/// The windowed one-sample t-test of \[UKF\] §3 with its quantile computed at
 /// configuration time.
 ///
 /// `alpha` is the probability of one tail: the two-sided test (a flag of

@@ -42,7 +42,7 @@ pub struct UpdateOutput<T, const N: usize, const M: usize> {
 /// augmented filters. Angle components (flagged at construction) use circular
 /// means — the weighted mean of wrapped differences to the first sigma point —
 /// and wrapped residuals. Sigma points for the update are redrawn from the
-/// predicted mean and covariance ([OTS] eq. (23)).
+/// predicted mean and covariance (\[OTS\] eq. (23)).
 ///
 /// Covariance health: after every step `P` is symmetrised and its diagonal
 /// floored at `min_variance`; a failed Cholesky factorisation re-initialises

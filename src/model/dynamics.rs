@@ -26,7 +26,7 @@ pub enum ModelError {
 /// θ̇ = q cosφ − r sinφ
 /// ψ̇ = (q sinφ + r cosφ) / cosθ
 /// ```
-/// ([UKF] eq. (4) with its `a_zm` typo in the first line corrected.)
+/// (\[UKF\] eq. (4) with its `a_zm` typo in the first line corrected.)
 ///
 /// The discrete step is the explicit midpoint rule (RK2): the input is held
 /// over the IMU period, and at 100 Hz with body rates below a few rad/s its

@@ -11,10 +11,10 @@ use crate::math::Real;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum AidingKind {
-    /// M1 (AUV, [UKF]): DVL body-frame velocity + compass/AHRS attitude,
+    /// M1 (AUV, \[UKF\]): DVL body-frame velocity + compass/AHRS attitude,
     /// `z = [u, v, w, φ, θ, ψ]`.
     DvlCompass,
-    /// M2 (aircraft, [OTS]): GNSS NED velocity + GNSS attitude,
+    /// M2 (aircraft, \[OTS\]): GNSS NED velocity + GNSS attitude,
     /// `z = [R_nb·v_body; φ; θ; ψ]`.
     GnssAttitude,
 }

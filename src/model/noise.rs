@@ -22,7 +22,7 @@ impl<T: Real> ImuNoisePsd<T> {
     }
 }
 
-/// Discrete process noise of one step ([OTS] eq. (13)).
+/// Discrete process noise of one step (\[OTS\] eq. (13)).
 ///
 /// `Q̄ = G q Gᵀ`, `M₁ = Q̄`, `M₂ = A M₁ + (A M₁)ᵀ`,
 /// `Q = M₁ dt + M₂ dt²/2` — the series truncated after i = 2: at 100 Hz the

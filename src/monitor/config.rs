@@ -51,6 +51,9 @@ pub struct UkfMonitorConfig<T> {
     pub detector: Detector,
     /// GLR acceptance threshold (χ²₁ scale).
     pub glr_threshold: T,
+    /// GLR: a further simultaneous fault is accepted only if its statistic is
+    /// at least this fraction of the first one's.
+    pub glr_relative: T,
     /// Dead-band of the run-time sign matrix, relative to the row maximum.
     pub sign_deadband: T,
     /// Smallest fault per IMU channel the monitor is specified to detect; used
@@ -117,6 +120,7 @@ impl<T: Real> UkfMonitorConfig<T> {
             statistic: Statistic::Normalized,
             detector: Detector::RuntimeMatrixGlr,
             glr_threshold: T::lit(40.0),
+            glr_relative: T::lit(0.02),
             sign_deadband: T::lit(0.3),
             min_fault: ImuVec::new(
                 T::lit(0.05),

@@ -74,7 +74,7 @@ pub struct Report<T> {
     pub status: [ChannelState; NU],
     /// Fault estimate (corrected innovation mapping `M⁺ r̄`, SPEC §6).
     pub fault_estimate: ImuVec<T>,
-    /// Fault estimate by [UKF] §4 as written, for comparison.
+    /// Fault estimate by \[UKF\] §4 as written, for comparison.
     pub fault_estimate_as_written: ImuVec<T>,
     /// Learned nominal bias (subtracted from the IMU before filtering).
     pub nominal_bias: ImuVec<T>,

@@ -22,7 +22,7 @@ const MEAS_ANGLES: [bool; NZ] = [false, false, false, true, true, true];
 /// anything larger is a fault from power-on, not a nominal error.
 const MAX_NOMINAL_BIAS_FACTOR: f64 = 20.0;
 
-/// The UKF innovation monitor ([UKF], SPEC §4–6, §8a) for one IMU.
+/// The UKF innovation monitor (\[UKF\], SPEC §4–6, §8a) for one IMU.
 ///
 /// Call [`step`](Self::step) once per IMU period with the measured `dt` and
 /// whatever aiding arrived in that period. `W` is the t-test window length in
@@ -493,7 +493,15 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             }
             Detector::RuntimeMatrixGlr => {
                 if flags.iter().any(|f| *f != 0) {
-                    glr_isolate(&m_eff, &rbar, &weight, self.cfg.glr_threshold, 3).signs
+                    glr_isolate(
+                        &m_eff,
+                        &rbar,
+                        &weight,
+                        self.cfg.glr_threshold,
+                        self.cfg.glr_relative,
+                        3,
+                    )
+                    .signs
                 } else {
                     [0; NZ]
                 }

@@ -23,7 +23,7 @@ struct Cli {
 
 #[derive(Clone, Copy, ValueEnum)]
 enum DetectorArg {
-    /// [UKF] §3.1 threshold method.
+    /// \[UKF\] §3.1 threshold method.
     Threshold,
     /// Paper's fixed sign matrix (erratum applied).
     Paper,
@@ -97,6 +97,19 @@ enum Cmd {
         #[arg(long, default_value_t = 5)]
         seeds: u64,
     },
+    /// Scale the fault sizes a, b, c of a scenario and print detection per channel for each scale.
+    Sweep {
+        /// Scenario name.
+        name: String,
+        /// Scale factors applied to every fault size.
+        #[arg(long, value_delimiter = ',', default_value = "0.25,0.5,1,2,4")]
+        factors: Vec<f64>,
+        /// Number of seeds per factor.
+        #[arg(long, default_value_t = 5)]
+        seeds: u64,
+        #[command(flatten)]
+        detect: DetectOpts,
+    },
     /// Write a simulated run in the SPEC §10 replay format (with truth columns).
     Simulate {
         /// Scenario name.
@@ -118,6 +131,9 @@ enum Cmd {
         /// JSON summary.
         #[arg(long)]
         summary: Option<PathBuf>,
+        /// With truth columns: seconds after a fault during which flags are not false alarms (2·L).
+        #[arg(long, default_value_t = 4.4)]
+        grace: f64,
         #[command(flatten)]
         detect: DetectOpts,
     },
@@ -244,6 +260,72 @@ fn main() -> Result<()> {
                 c.total_false_alarms()
             );
         }
+        Cmd::Sweep {
+            name,
+            factors,
+            seeds,
+            detect,
+        } => {
+            let base = scenario(&name)?;
+            let opts = options(&name, &detect);
+            println!(
+                "sweep of {}: fault sizes × factor, {} seeds each, detector {:?}, statistic {:?}",
+                base.name, seeds, opts.detector, opts.statistic
+            );
+            println!(
+                "{:>7}  {:>20}  {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}  {:>9} {:>8}",
+                "factor",
+                "sizes a,b,c (acc)",
+                "ax",
+                "ay",
+                "az",
+                "gx",
+                "gy",
+                "gz",
+                "wrong.max",
+                "FA.evts"
+            );
+            for f in factors {
+                let mut scn = base.clone();
+                for v in scn.sizes.accel.iter_mut().chain(scn.sizes.gyro.iter_mut()) {
+                    *v *= f;
+                }
+                let m = campaign(&scn, 1, seeds.max(1), &opts)?;
+                let cells: Vec<String> = m
+                    .channels
+                    .iter()
+                    .map(|c| {
+                        format!(
+                            "{}/{} {}",
+                            c.detected,
+                            c.faults,
+                            c.detection_rate()
+                                .map_or("-".into(), |r| format!("{:.0}%", 100.0 * r))
+                        )
+                    })
+                    .collect();
+                let wrong = m
+                    .channels
+                    .iter()
+                    .filter_map(|c| c.wrong_channel_rate())
+                    .fold(0.0, f64::max);
+                let a = scn.sizes.accel;
+                println!(
+                    "{:>7}  {:>20}  {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}  {:>8.2}% {:>8}",
+                    f,
+                    format!("{:.3},{:.3},{:.2}", a[0], a[1], a[2]),
+                    cells[0],
+                    cells[1],
+                    cells[2],
+                    cells[3],
+                    cells[4],
+                    cells[5],
+                    100.0 * wrong,
+                    m.false_alarm_events
+                );
+            }
+            println!("detection rate counted where |fault| ≥ the scenario's minimum (0.1 m/s², 0.5 °/s) from L after it is reached");
+        }
         Cmd::Simulate { name, seed, out } => {
             let scn = scenario(&name)?;
             let n = hal_sim::replay::write_simulated(&scn, seed, &out)?;
@@ -257,12 +339,14 @@ fn main() -> Result<()> {
             input,
             out,
             summary,
+            grace,
             detect,
         } => {
             let opts = options("replay", &detect);
             let mut cfg: UkfMonitorConfig<f64> = monitor_config(&Scenario::s2(), &opts);
             cfg.detector = opts.detector;
-            let s = hal_sim::replay::replay(&input, out.as_deref(), summary.as_deref(), cfg)?;
+            let s =
+                hal_sim::replay::replay(&input, out.as_deref(), summary.as_deref(), cfg, grace)?;
             println!("replayed {} rows ({} skipped, {} IMU rows rejected), aiding {}, monitoring from {:?} s", s.rows, s.skipped_rows, s.rejected_imu_rows, s.aiding, s.monitoring_from_s);
             for c in &s.channels {
                 println!(

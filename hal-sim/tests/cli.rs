@@ -1,0 +1,100 @@
+//! The CLI driven as a user would: spawned process, files in a temp dir.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)] // test code
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_imu-fdi-sim"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("imu-fdi-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+#[test]
+fn simulate_then_replay_round_trip_detects_s2_faults() {
+    let input = tmp("s2.csv");
+    let out = tmp("s2-out.csv");
+    let summary = tmp("s2-summary.json");
+    let o = bin()
+        .args(["simulate", "s2", "--seed", "3", "--out"])
+        .arg(&input)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = bin()
+        .arg("replay")
+        .arg(&input)
+        .arg("--out")
+        .arg(&out)
+        .arg("--summary")
+        .arg(&summary)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("replayed 6500 rows"), "{stdout}");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    assert_eq!(s["aiding"], "DvlCompass");
+    for ch in s["channels"].as_array().unwrap() {
+        let faults = ch["fault_samples"].as_u64().unwrap();
+        let correct = ch["correct_samples"].as_u64().unwrap();
+        assert!(faults > 0 && correct as f64 > 0.6 * faults as f64, "{ch}");
+        assert_eq!(ch["false_alarm_samples"], 0, "{ch}");
+    }
+    let text = std::fs::read_to_string(&out).unwrap();
+    let header = text.lines().next().unwrap();
+    assert!(header.starts_with("t,x_u,x_v,x_w,x_roll,x_pitch,x_yaw,flag_ax"));
+    assert_eq!(text.lines().count(), 6501);
+}
+
+#[test]
+fn replay_reports_missing_columns_with_the_file_name() {
+    let input = tmp("bad-columns.csv");
+    std::fs::write(&input, "t,imu0_ax,imu0_ay\n0.0,1,2\n").unwrap();
+    let o = bin().arg("replay").arg(&input).output().unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("bad-columns.csv") && err.contains("imu0_az"),
+        "{err}"
+    );
+}
+
+#[test]
+fn replay_skips_non_monotonic_and_rejects_nan_rows() {
+    let input = tmp("jumbled.csv");
+    let mut s = String::from("t,imu0_ax,imu0_ay,imu0_az,imu0_gx,imu0_gy,imu0_gz,dvl_u,dvl_v,dvl_w,att_roll,att_pitch,att_yaw\n");
+    for k in 0..50 {
+        s.push_str(&format!(
+            "{},0,0,-9.80665,0,0,0,0,0,0,0,0,0\n",
+            k as f64 * 0.01
+        ));
+    }
+    s.push_str("0.2,0,0,-9.8,0,0,0,,,,,,\n"); // time goes backwards
+    s.push_str("0.6,NaN,0,-9.8,0,0,0,,,,,,\n"); // NaN sample
+    std::fs::write(&input, s).unwrap();
+    let o = bin().arg("replay").arg(&input).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("replayed 52 rows (1 skipped, 1 IMU rows rejected)"),
+        "{out}"
+    );
+}
+
+#[test]
+fn unknown_scenario_is_a_clear_error() {
+    let o = bin().args(["scenario", "s9"]).output().unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown scenario 's9'"));
+}
