@@ -72,7 +72,10 @@ fn long_run(hours: f64) {
     // 5.8, a third of it 30 with false alarms). So: never over-confident, and
     // not more than 1.5× conservative in σ.
     assert!(nees <= 6.0 + half, "over-confident filter: NEES {nees}");
-    assert!(nees >= 6.0 / 1.5f64.powi(2), "far too conservative: NEES {nees}");
+    assert!(
+        nees >= 6.0 / 1.5f64.powi(2),
+        "far too conservative: NEES {nees}"
+    );
 }
 
 #[test]
