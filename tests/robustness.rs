@@ -58,6 +58,14 @@ fn nan_and_out_of_range_imu_samples_are_rejected() {
 }
 
 #[test]
+fn alignment_on_a_nan_sample_does_not_leak_nan() {
+    // Found by the property test below on a fresh machine.
+    let mut m = UkfMonitor::<f32>::new(UkfMonitorConfig::auv()).unwrap();
+    let r = m.step(&ImuVec::from_element(f32::NAN), 0.01, &aiding(true));
+    assert!(r.health.input_invalid && finite(&r), "{:?}", r.state);
+}
+
+#[test]
 fn bad_dt_is_reported_and_gaps_are_bounded() {
     let mut m = aligned();
     for dt in [0.0, -0.01, f32::NAN, f32::INFINITY] {
@@ -158,8 +166,50 @@ fn nan_aiding_channels_are_ignored() {
     assert!(!r.diag[0].fused);
 }
 
+/// A channel whose aiding is absent is "not monitored", a third state
+/// distinct from healthy: DVL lost → accelerometers not monitored, gyros
+/// still monitored through the compass.
+#[test]
+fn lost_aiding_makes_channels_not_monitored() {
+    use hal_sim::runner::{monitor_config, RunOptions};
+    use hal_sim::{Scenario, Simulator};
+    use imu_fdi::monitor::ChannelState;
+    let scn = Scenario::auv_fault_free(30.0);
+    let mut m = UkfMonitor::<f32>::new(monitor_config(&scn, &RunOptions::default())).unwrap();
+    let mut last = None;
+    for s in Simulator::new(&scn, 1) {
+        let mut avail = s.aiding_available;
+        if s.t > 20.0 {
+            avail[0] = false;
+            avail[1] = false;
+            avail[2] = false;
+        }
+        let u = ImuVec::from_fn(|i, _| s.imu.unwrap()[i] as f32);
+        let z = MeasVec::from_fn(|i, _| s.aiding[i] as f32);
+        let r = m.step(
+            &u,
+            0.01,
+            &Measurement {
+                z,
+                available: avail,
+            },
+        );
+        if (s.t - 19.9).abs() < 1e-9 {
+            assert!(
+                r.status.iter().all(|c| *c == ChannelState::Healthy),
+                "{:?}",
+                r.status
+            );
+        }
+        last = Some(r);
+    }
+    let r = last.unwrap();
+    assert_eq!(r.status[..3], [ChannelState::NotMonitored; 3]);
+    assert_eq!(r.status[3..], [ChannelState::Healthy; 3]);
+}
+
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(64))]
+    #![proptest_config(ProptestConfig::with_cases(256))]
     /// Arbitrary sequences of samples, dt and aiding (including NaN, huge
     /// and negative values) never panic and never produce a non-finite state.
     #[test]

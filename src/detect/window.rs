@@ -60,6 +60,50 @@ impl<T: Real, const N: usize> InnovationWindow<T, N> {
     pub fn is_empty(&self) -> bool {
         self.buf.is_empty()
     }
+    /// Windowed outlier removal: statistics recomputed without the samples
+    /// farther than `k` sample standard deviations from the window mean
+    /// (one pass; at most a quarter of the window may be removed, so a
+    /// genuine step in the window is not trimmed away). Returns the
+    /// statistics and how many samples were dropped.
+    pub fn stats_trimmed(&self, k: T) -> Option<(WindowStats<T>, usize)> {
+        let full = self.stats()?;
+        if !full.std.finite() || full.std <= T::zero() || !k.finite() || k <= T::zero() {
+            return Some((full, 0));
+        }
+        let limit = k * full.std;
+        let outliers = self
+            .buf
+            .iter()
+            .filter(|x| (**x - full.mean).abs() > limit)
+            .count();
+        if outliers == 0 || outliers * 4 > self.buf.len() {
+            return Some((full, 0));
+        }
+        let kept = self.buf.len() - outliers;
+        if kept < 2 {
+            return Some((full, 0));
+        }
+        let nf = T::lit(kept as f64);
+        let mut sum = T::zero();
+        for x in self.buf.iter().filter(|x| (**x - full.mean).abs() <= limit) {
+            sum += *x;
+        }
+        let mean = sum / nf;
+        let mut ss = T::zero();
+        for x in self.buf.iter().filter(|x| (**x - full.mean).abs() <= limit) {
+            let d = *x - mean;
+            ss += d * d;
+        }
+        Some((
+            WindowStats {
+                n: kept,
+                mean,
+                std: (ss / (nf - T::one())).sqrt_fast(),
+            },
+            outliers,
+        ))
+    }
+
     /// Mean and standard deviation, or `None` with fewer than two samples.
     pub fn stats(&self) -> Option<WindowStats<T>> {
         let n = self.buf.len();
@@ -82,5 +126,31 @@ impl<T: Real, const N: usize> InnovationWindow<T, N> {
             mean,
             std: (ss / (nf - T::one())).sqrt_fast(),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn outlier_removal_drops_a_spike_but_not_a_step() {
+        let mut w = InnovationWindow::<f64, 10>::new();
+        for k in 0..10 {
+            w.push(if k == 4 {
+                50.0
+            } else {
+                0.01 * f64::from(k % 3)
+            });
+        }
+        let (s, dropped) = w.stats_trimmed(2.5).unwrap();
+        assert_eq!((dropped, s.n), (1, 9));
+        assert!(s.mean.abs() < 0.02);
+        // A step covering half the window is data, not an outlier.
+        let mut w = InnovationWindow::<f64, 10>::new();
+        for k in 0..10 {
+            w.push(if k < 5 { 0.0 } else { 1.0 });
+        }
+        assert_eq!(w.stats_trimmed(2.5).unwrap().1, 0);
     }
 }

@@ -45,6 +45,10 @@ pub struct UkfMonitorConfig<T> {
     pub gate_max_rejections: u8,
     /// Per-tail significance of the windowed t-test.
     pub alpha: f64,
+    /// Windowed outlier removal (SPEC §5): samples beyond this many window σ
+    /// are dropped before the test (0 disables; off by default because the
+    /// filter's gate already rejects single-epoch aiding spikes).
+    pub outlier_k: T,
     /// Raw or pre-whitened innovations in the windows.
     pub statistic: Statistic,
     /// Decision rule.
@@ -117,6 +121,7 @@ impl<T: Real> UkfMonitorConfig<T> {
             gate_sigma: T::lit(8.0),
             gate_max_rejections: 2,
             alpha: 1e-6,
+            outlier_k: T::zero(),
             statistic: Statistic::Normalized,
             detector: Detector::RuntimeMatrixGlr,
             glr_threshold: T::lit(40.0),

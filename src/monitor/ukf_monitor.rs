@@ -198,7 +198,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
 
         // --- alignment ----------------------------------------------------
         if self.phase == Phase::Aligning {
-            self.try_align(aiding, imu);
+            // An invalid sample must not reach the state through the lever-arm term.
+            let omega = if in_range {
+                imu.fixed_rows::<3>(3).into_owned()
+            } else {
+                Vector3::zeros()
+            };
+            self.try_align(aiding, &omega);
             self.report = self.compose(imu, health, false);
             return self.report;
         }
@@ -219,7 +225,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // --- measurement update --------------------------------------------
         let meas_ok = aiding.any();
         if meas_ok && !health.pitch_singular {
-            let omega: Vector3<T> = imu.fixed_rows::<3>(3) - self.nominal_bias.fixed_rows::<3>(3);
+            let omega: Vector3<T> = if in_range {
+                imu.fixed_rows::<3>(3) - self.nominal_bias.fixed_rows::<3>(3)
+            } else {
+                Vector3::zeros()
+            };
             match self.update(aiding, &omega) {
                 Ok((rejected, reset)) => {
                     updated = true;
@@ -244,7 +254,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.report
     }
 
-    fn try_align(&mut self, aiding: &Measurement<T>, imu: &ImuVec<T>) {
+    fn try_align(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>) {
         let att = aiding
             .available
             .get(ROLL..=YAW)
@@ -262,7 +272,6 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             && aiding.z.iter().take(3).all(|v| v.finite());
         if vel {
             let v: Vector3<T> = aiding.z.fixed_rows::<3>(0).into_owned();
-            let omega: Vector3<T> = imu.fixed_rows::<3>(3).into_owned();
             let v_imu = self.meas.velocity_to_body(&x, &v) - omega.cross(&self.meas.lever_arm);
             x.fixed_rows_mut::<3>(0).copy_from(&v_imu);
         }
@@ -414,7 +423,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             if !w.is_full() {
                 return None;
             }
-            let s = w.stats()?;
+            let s = if self.cfg.outlier_k > T::zero() {
+                w.stats_trimmed(self.cfg.outlier_k)?.0
+            } else {
+                w.stats()?
+            };
             let n = T::lit(s.n as f64);
             Some(match self.cfg.statistic {
                 Statistic::Normalized => (s.mean * n.sqrt_fast(), s.mean, T::one() / n),
