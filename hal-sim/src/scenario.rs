@@ -28,6 +28,10 @@ pub struct AidingSpec {
     pub att_rate_hz: f64,
     /// Attitude noise σ `[roll, pitch, yaw]`, rad.
     pub att_sigma: [f64; 3],
+    /// Latency of both aiding sensors, s: each value describes the vehicle
+    /// this long before it is delivered.
+    #[cfg_attr(feature = "std", serde(default))]
+    pub delay_s: f64,
 }
 
 #[cfg(feature = "std")]
@@ -63,6 +67,7 @@ impl AidingSpec {
             vel_sigma: 0.01,
             att_rate_hz: 10.0,
             att_sigma: [0.02 * DEG, 0.02 * DEG, 0.05 * DEG],
+            delay_s: 0.0,
         }
     }
     /// 10 Hz GNSS velocity (σ 0.05 m/s) and 10 Hz GNSS attitude (σ 0.1°
@@ -74,6 +79,7 @@ impl AidingSpec {
             vel_sigma: 0.05,
             att_rate_hz: 10.0,
             att_sigma: [0.1 * DEG, 0.1 * DEG, 0.2 * DEG],
+            delay_s: 0.0,
         }
     }
 }

@@ -164,10 +164,17 @@ impl Iterator for Simulator {
         }
         let mut aiding = [0.0; 6];
         let mut avail = [false; 6];
+        // Aiding describes the vehicle `delay_s` ago.
+        let seen = if self.scenario.aiding.delay_s > 0.0 {
+            self.trajectory
+                .at((t - self.scenario.aiding.delay_s).max(0.0))
+        } else {
+            truth
+        };
         if self.k % self.vel_every == 0 {
-            let x = StateVec::from(truth.state);
+            let x = StateVec::from(seen.state);
             let v = match self.scenario.aiding.kind {
-                AidingKind::DvlCompass => [truth.state[0], truth.state[1], truth.state[2]],
+                AidingKind::DvlCompass => [seen.state[0], seen.state[1], seen.state[2]],
                 AidingKind::GnssAttitude => {
                     let z = self.meas.predict(&x, &nalgebra::Vector3::zeros());
                     [z[0], z[1], z[2]]
@@ -190,7 +197,7 @@ impl Iterator for Simulator {
                 let n = self.gauss();
                 if let (Some(a), Some(ok)) = (aiding.get_mut(3 + i), avail.get_mut(3 + i)) {
                     *a = wrap_pi_f64(
-                        truth.state.get(3 + i).copied().unwrap_or(0.0)
+                        seen.state.get(3 + i).copied().unwrap_or(0.0)
                             + sig.get(i).copied().unwrap_or(0.0) * n,
                     );
                     *ok = true;

@@ -142,8 +142,8 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         self.p = p;
     }
 
-    fn sigma_points(&self, l: &SMatrix<T, N, N>) -> [SVector<T, N>; S] {
-        let mut pts = [self.x; S];
+    fn sigma_points(&self, center: &SVector<T, N>, l: &SMatrix<T, N, N>) -> [SVector<T, N>; S] {
+        let mut pts = [*center; S];
         for (k, col) in l.column_iter().enumerate() {
             let off = col * self.weights.gamma;
             if let Some(p) = pts.get_mut(1 + k) {
@@ -193,7 +193,7 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         q: &SMatrix<T, N, N>,
     ) -> Result<(), UkfError<E>> {
         let (l, failure) = self.factor();
-        let chi = self.sigma_points(&l);
+        let chi = self.sigma_points(&self.x, &l);
         let mut y = chi;
         for (out, pt) in y.iter_mut().zip(chi.iter()) {
             *out = f(pt).map_err(UkfError::Model)?;
@@ -227,13 +227,48 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         &mut self,
         z: &SVector<T, M>,
         available: &[bool; M],
+        h: impl FnMut(&SVector<T, N>) -> Result<SVector<T, M>, E>,
+        r: &SVector<T, M>,
+        meas_angles: &[bool; M],
+        gate: &mut Gate<T, M>,
+    ) -> Result<UpdateOutput<T, N, M>, UkfError<E>> {
+        let center = self.x;
+        self.update_about(&center, z, available, h, r, meas_angles, gate)
+    }
+
+    /// Update with a measurement that was taken when the state was
+    /// `delayed` (a known aiding latency, SPEC §3.1): the sigma points are
+    /// spread by the current covariance around the delayed state, and the
+    /// correction is applied to the current state. This is the usual
+    /// short-delay approximation: it assumes the covariance changes little
+    /// over the delay, which holds for delays of a few IMU periods.
+    #[allow(clippy::too_many_arguments)]
+    pub fn update_delayed<const M: usize, E>(
+        &mut self,
+        delayed: &SVector<T, N>,
+        z: &SVector<T, M>,
+        available: &[bool; M],
+        h: impl FnMut(&SVector<T, N>) -> Result<SVector<T, M>, E>,
+        r: &SVector<T, M>,
+        meas_angles: &[bool; M],
+        gate: &mut Gate<T, M>,
+    ) -> Result<UpdateOutput<T, N, M>, UkfError<E>> {
+        self.update_about(delayed, z, available, h, r, meas_angles, gate)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn update_about<const M: usize, E>(
+        &mut self,
+        center: &SVector<T, N>,
+        z: &SVector<T, M>,
+        available: &[bool; M],
         mut h: impl FnMut(&SVector<T, N>) -> Result<SVector<T, M>, E>,
         r: &SVector<T, M>,
         meas_angles: &[bool; M],
         gate: &mut Gate<T, M>,
     ) -> Result<UpdateOutput<T, N, M>, UkfError<E>> {
         let (l, failure) = self.factor();
-        let chi = self.sigma_points(&l);
+        let chi = self.sigma_points(center, &l);
         let mut zs = [SVector::<T, M>::zeros(); S];
         for (out, pt) in zs.iter_mut().zip(chi.iter()) {
             *out = h(pt).map_err(UkfError::Model)?;
@@ -243,7 +278,7 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         let mut pxz = SMatrix::<T, N, M>::zeros();
         for ((zp, xp), w) in zs.iter().zip(chi.iter()).zip(self.weights.wc.iter()) {
             let dz = diff(zp, &z_hat, meas_angles);
-            let dx = diff(xp, &self.x, &self.angles);
+            let dx = diff(xp, center, &self.angles);
             pzz += dz * dz.transpose() * *w;
             pxz += dx * dz.transpose() * *w;
         }

@@ -13,6 +13,8 @@ pub enum ConfigError {
     TTest,
     /// A noise, σ, rate or time constant is not finite and positive.
     NonPositive,
+    /// The aiding latency is negative or longer than the state history.
+    AidingDelay,
 }
 
 /// Everything the UKF monitor is tuned by. Units are SI (m/s², rad/s, m/s,
@@ -83,6 +85,10 @@ pub struct UkfMonitorConfig<T> {
     pub full_scale: ImuVec<T>,
     /// Nominal IMU period, s; `dt` beyond 5× is a gap.
     pub imu_period: T,
+    /// Known latency of the aiding measurements, s (0 = none): they are
+    /// fused against the state estimate of their own time, kept in a short
+    /// history of up to [`MAX_DELAY_STEPS`](super::MAX_DELAY_STEPS) IMU periods.
+    pub aiding_delay_s: T,
     /// An aiding channel silent for this long is "not monitored", s.
     pub aiding_timeout_s: T,
     /// Identical consecutive IMU samples before the IMU is reported frozen.
@@ -158,6 +164,7 @@ impl<T: Real> UkfMonitorConfig<T> {
                 T::lit(2000.0 * deg),
             ),
             imu_period: T::lit(0.01),
+            aiding_delay_s: T::zero(),
             aiding_timeout_s: T::lit(1.0),
             frozen_samples: 20,
         }
@@ -203,6 +210,13 @@ impl<T: Real> UkfMonitorConfig<T> {
             && pos(self.gravity);
         if !all_pos {
             return Err(ConfigError::NonPositive);
+        }
+        let delay_steps = self.aiding_delay_s / self.imu_period;
+        if !delay_steps.finite()
+            || delay_steps < T::zero()
+            || delay_steps > T::lit(super::MAX_DELAY_STEPS as f64)
+        {
+            return Err(ConfigError::AidingDelay);
         }
         if !(self.alpha > 0.0 && self.alpha <= 0.5) {
             return Err(ConfigError::TTest);

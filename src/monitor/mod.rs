@@ -7,4 +7,4 @@ mod ukf_monitor;
 
 pub use config::{ConfigError, UkfMonitorConfig};
 pub use report::{ChannelState, Health, Phase, Report};
-pub use ukf_monitor::{UkfMonitor, DEFAULT_WINDOW};
+pub use ukf_monitor::{UkfMonitor, DEFAULT_WINDOW, MAX_DELAY_STEPS};

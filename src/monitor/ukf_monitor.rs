@@ -7,7 +7,7 @@ use crate::detect::{
     PAPER_MATRIX_AS_PRINTED, PAPER_MATRIX_CORRECTED,
 };
 use crate::filter::{ChannelDiag, Gate, Ukf, UkfError};
-use crate::math::Real;
+use crate::math::{wrap_pi, Real};
 use crate::model::{
     discrete_process_noise, ImuVec, Mat6, Measurement, MeasurementModel, ModelError, StateVec,
     VehicleModel, NX, NZ, ROLL, STATE_ANGLES, YAW,
@@ -16,6 +16,8 @@ use crate::stats::normal_upper_quantile;
 
 /// Default window length (aiding epochs per t-test window).
 pub const DEFAULT_WINDOW: usize = 10;
+/// Longest aiding latency the state history covers, in IMU periods.
+pub const MAX_DELAY_STEPS: usize = 32;
 
 const MEAS_ANGLES: [bool; NZ] = [false, false, false, true, true, true];
 /// Largest nominal bias the learner may assume, as a multiple of `min_fault`:
@@ -62,6 +64,8 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     last_input_b: Mat6<T>,
     last_h: Mat6<T>,
     last_dt: T,
+    delay_steps: usize,
+    history: heapless::HistoryBuf<StateVec<T>, { MAX_DELAY_STEPS + 1 }>,
     report: Report<T>,
 }
 
@@ -113,6 +117,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             last_input_b: Mat6::identity(),
             last_h: Mat6::identity(),
             last_dt: cfg.imu_period,
+            delay_steps: (cfg.aiding_delay_s / cfg.imu_period).round().to_f64() as usize,
+            history: heapless::HistoryBuf::new(),
             report: Report::default(),
             cfg,
         })
@@ -296,6 +302,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         };
         self.sensitivity = phi * self.sensitivity + b * dt;
         self.last_input_b = b;
+        self.history.write(*self.ukf.state());
         Ok(reset)
     }
 
@@ -312,14 +319,37 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         for (a, z) in available.iter_mut().zip(aiding.z.iter()) {
             *a = *a && z.finite();
         }
-        let out = self.ukf.update(
-            &aiding.z,
-            &available,
-            |s| Ok(meas.predict(s, omega)),
-            &r,
-            &MEAS_ANGLES,
-            &mut self.gate,
-        )?;
+        // With a known latency, predict the measurement from the state of its
+        // time (the history holds one state per IMU step, newest last).
+        let delayed = if self.delay_steps > 0 {
+            self.history
+                .oldest_ordered()
+                .rev()
+                .nth(self.delay_steps)
+                .copied()
+        } else {
+            None
+        };
+        let h_fn = |s: &StateVec<T>| Ok(meas.predict(s, omega));
+        let out = match delayed {
+            Some(xd) => self.ukf.update_delayed(
+                &xd,
+                &aiding.z,
+                &available,
+                h_fn,
+                &r,
+                &MEAS_ANGLES,
+                &mut self.gate,
+            )?,
+            None => self.ukf.update(
+                &aiding.z,
+                &available,
+                h_fn,
+                &r,
+                &MEAS_ANGLES,
+                &mut self.gate,
+            )?,
+        };
         let hx = h * self.sensitivity;
         let record = self.saturation_holdoff <= T::zero();
         let mut rejected = false;
@@ -353,6 +383,23 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         self.report.diag = out.diag;
         self.sensitivity = (Mat6::identity() - out.gain * h) * self.sensitivity;
+        // The correction moved the current state: shift the history with it so
+        // the next delayed measurement sees a consistent past.
+        if self.delay_steps > 0 {
+            let mut dx = self.ukf.state() - x_prior;
+            for v in dx.iter_mut().skip(ROLL) {
+                *v = wrap_pi(*v);
+            }
+            let mut shifted = heapless::HistoryBuf::<StateVec<T>, { MAX_DELAY_STEPS + 1 }>::new();
+            for s in self.history.oldest_ordered() {
+                let mut n = s + dx;
+                for v in n.iter_mut().skip(ROLL) {
+                    *v = wrap_pi(*v);
+                }
+                shifted.write(n);
+            }
+            self.history = shifted;
+        }
         self.last_h = h;
         Ok((rejected, out.covariance_reset.is_some()))
     }
