@@ -12,6 +12,7 @@
 pub mod fault;
 pub mod imu_model;
 pub mod scenario;
+pub mod setup;
 pub mod sim;
 pub mod trajectory;
 

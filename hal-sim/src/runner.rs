@@ -1,11 +1,11 @@
 //! Runs the UKF monitor over a simulated scenario and records a trace.
 
-use imu_fdi::detect::{Detector, Statistic};
 use imu_fdi::math::Real;
 use imu_fdi::model::{ImuVec, MeasVec, Measurement};
 use imu_fdi::monitor::{Phase, UkfMonitor, UkfMonitorConfig, DEFAULT_WINDOW};
 
 use crate::scenario::Scenario;
+pub use crate::setup::{monitor_config, RunOptions};
 use crate::sim::Simulator;
 
 /// One row of a run trace (one IMU period).
@@ -60,62 +60,6 @@ pub struct Trace {
     pub latency_s: f64,
     /// The t-test critical value used.
     pub t_threshold: f64,
-}
-
-/// Detector choices a run is parameterised by (the rest of the
-/// configuration follows the scenario's sensors).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RunOptions {
-    /// Decision rule.
-    pub detector: Detector,
-    /// Raw or whitened windows.
-    pub statistic: Statistic,
-    /// Per-tail α of the t-test.
-    pub alpha: f64,
-}
-
-impl Default for RunOptions {
-    fn default() -> Self {
-        Self {
-            detector: Detector::RuntimeMatrixGlr,
-            statistic: Statistic::Normalized,
-            alpha: 1e-6,
-        }
-    }
-}
-
-/// The monitor configuration matching a scenario's sensors: the aiding noise
-/// σ and IMU full scale are the sensors' specifications (what an integrator
-/// knows); everything else is the monitor's defaults for that vehicle class.
-pub fn monitor_config<T: Real>(scn: &Scenario, opts: &RunOptions) -> UkfMonitorConfig<T> {
-    let mut c = match scn.aiding.kind {
-        imu_fdi::model::AidingKind::DvlCompass => UkfMonitorConfig::<T>::auv(),
-        imu_fdi::model::AidingKind::GnssAttitude => UkfMonitorConfig::<T>::aircraft(),
-    };
-    let a = &scn.aiding;
-    c.meas_sigma = MeasVec::new(
-        T::lit(a.vel_sigma),
-        T::lit(a.vel_sigma),
-        T::lit(a.vel_sigma),
-        T::lit(a.att_sigma[0]),
-        T::lit(a.att_sigma[1]),
-        T::lit(a.att_sigma[2]),
-    );
-    let fa = scn.imu_errors.accel.full_scale;
-    let fg = scn.imu_errors.gyro.full_scale;
-    c.full_scale = ImuVec::new(
-        T::lit(fa),
-        T::lit(fa),
-        T::lit(fa),
-        T::lit(fg),
-        T::lit(fg),
-        T::lit(fg),
-    );
-    c.imu_period = T::lit(1.0 / scn.imu_rate_hz);
-    c.detector = opts.detector;
-    c.statistic = opts.statistic;
-    c.alpha = opts.alpha;
-    c
 }
 
 /// Latency allowance L for a scenario: one window of the slowest aiding

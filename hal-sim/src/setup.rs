@@ -1,0 +1,139 @@
+//! Scenario → monitor set-up and a detection tally, without `std`, so the
+//! host runner and the firmware image configure the monitor identically.
+
+use imu_fdi::detect::{Detector, Statistic};
+use imu_fdi::math::Real;
+use imu_fdi::model::{ImuVec, MeasVec};
+use imu_fdi::monitor::{Report, UkfMonitorConfig};
+
+use crate::fault::FaultRow;
+use crate::scenario::{Scenario, MAX_FAULTS};
+use crate::sim::SimSample;
+
+/// Detector choices a run is parameterised by (the rest of the
+/// configuration follows the scenario's sensors).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunOptions {
+    /// Decision rule.
+    pub detector: Detector,
+    /// Raw or whitened windows.
+    pub statistic: Statistic,
+    /// Per-tail α of the t-test.
+    pub alpha: f64,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        Self {
+            detector: Detector::RuntimeMatrixGlr,
+            statistic: Statistic::Normalized,
+            alpha: 1e-6,
+        }
+    }
+}
+
+/// The monitor configuration matching a scenario's sensors: the aiding noise
+/// σ and IMU full scale are the sensors' specifications (what an integrator
+/// knows); everything else is the monitor's defaults for that vehicle class.
+pub fn monitor_config<T: Real>(scn: &Scenario, opts: &RunOptions) -> UkfMonitorConfig<T> {
+    let mut c = match scn.aiding.kind {
+        imu_fdi::model::AidingKind::DvlCompass => UkfMonitorConfig::<T>::auv(),
+        imu_fdi::model::AidingKind::GnssAttitude => UkfMonitorConfig::<T>::aircraft(),
+    };
+    let a = &scn.aiding;
+    c.meas_sigma = MeasVec::new(
+        T::lit(a.vel_sigma),
+        T::lit(a.vel_sigma),
+        T::lit(a.vel_sigma),
+        T::lit(a.att_sigma[0]),
+        T::lit(a.att_sigma[1]),
+        T::lit(a.att_sigma[2]),
+    );
+    let fa = scn.imu_errors.accel.full_scale;
+    let fg = scn.imu_errors.gyro.full_scale;
+    c.full_scale = ImuVec::new(
+        T::lit(fa),
+        T::lit(fa),
+        T::lit(fa),
+        T::lit(fg),
+        T::lit(fg),
+        T::lit(fg),
+    );
+    c.imu_period = T::lit(1.0 / scn.imu_rate_hz);
+    c.detector = opts.detector;
+    c.statistic = opts.statistic;
+    c.alpha = opts.alpha;
+    c
+}
+
+/// Per fault row of a scenario: was it flagged on its channel with the right
+/// sign, and when first.
+#[derive(Debug, Clone)]
+pub struct DetectionTally {
+    rows: heapless::Vec<(FaultRow, Option<f64>), MAX_FAULTS>,
+}
+
+impl DetectionTally {
+    /// A tally for `scn`'s fault table (additive faults only).
+    pub fn new(scn: &Scenario) -> Self {
+        Self {
+            rows: scn
+                .faults
+                .iter()
+                .filter(|r| !r.is_hardware())
+                .map(|r| (*r, None))
+                .collect(),
+        }
+    }
+
+    /// Records one step.
+    pub fn record<T: Real>(&mut self, s: &SimSample, r: &Report<T>) {
+        for (row, first) in self.rows.iter_mut() {
+            if first.is_some() || !row.active(s.t) {
+                continue;
+            }
+            let f = s.fault.get(row.channel).copied().unwrap_or(0.0);
+            let want = if f > 0.0 { 1 } else { -1 };
+            if f != 0.0 && r.status.get(row.channel).and_then(|c| c.sign()) == Some(want) {
+                *first = Some(s.t);
+            }
+        }
+    }
+
+    /// True when every row was detected.
+    pub fn all_detected(&self) -> bool {
+        self.rows.iter().all(|(_, f)| f.is_some())
+    }
+
+    /// Number of rows detected, of all rows.
+    pub fn counts(&self) -> (usize, usize) {
+        (
+            self.rows.iter().filter(|(_, f)| f.is_some()).count(),
+            self.rows.len(),
+        )
+    }
+
+    /// One line per fault row through `out`.
+    pub fn print(&self, mut out: impl FnMut(core::fmt::Arguments<'_>)) {
+        for (row, first) in self.rows.iter() {
+            let name = imu_fdi::model::CHANNEL_NAMES
+                .get(row.channel)
+                .copied()
+                .unwrap_or("?");
+            match first {
+                Some(t) => out(format_args!(
+                    "fault {} {:.0}-{:.0} s: detected at {:.2} s ({:.2} s after onset)",
+                    name,
+                    row.start,
+                    row.end,
+                    t,
+                    t - row.start
+                )),
+                None => out(format_args!(
+                    "fault {} {:.0}-{:.0} s: NOT detected",
+                    name, row.start, row.end
+                )),
+            }
+        }
+    }
+}
