@@ -11,7 +11,7 @@ mod noise;
 
 pub use dynamics::{ModelError, VehicleModel};
 pub use measurement::{AidingKind, Measurement, MeasurementModel, LEVER_ARM_NONE};
-pub use noise::{discrete_process_noise, ImuNoisePsd};
+pub use noise::{discrete_process_noise, discrete_process_noise_from, ImuNoisePsd};
 
 use nalgebra::{SMatrix, SVector};
 

@@ -36,13 +36,28 @@ pub fn discrete_process_noise<T: Real>(
 ) -> Result<Mat6<T>, ModelError> {
     let g = model.jacobian_input(x)?;
     let a = model.jacobian_state(x, u)?;
-    let gq = g * Mat6::from_diagonal(&noise.psd);
+    Ok(discrete_process_noise_from(&a, &g, noise, dt))
+}
+
+/// [`discrete_process_noise`] from Jacobians the caller already has
+/// (`a = ∂f/∂x`, `g = ∂f/∂u`), so a filter step evaluates them once.
+pub fn discrete_process_noise_from<T: Real>(
+    a: &Mat6<T>,
+    g: &Mat6<T>,
+    noise: &ImuNoisePsd<T>,
+    dt: T,
+) -> Mat6<T> {
+    // G·diag(q) scales the columns of G.
+    let mut gq = *g;
+    for (mut col, q) in gq.column_iter_mut().zip(noise.psd.iter()) {
+        col *= *q;
+    }
     let m1 = gq * g.transpose();
     let am1 = a * m1;
     let m2 = am1 + am1.transpose();
     let mut q = m1 * dt + m2 * (dt * dt * T::lit(0.5));
     symmetrize(&mut q);
-    Ok(q)
+    q
 }
 
 #[cfg(test)]

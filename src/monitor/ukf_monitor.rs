@@ -9,7 +9,7 @@ use crate::detect::{
 use crate::filter::{ChannelDiag, Gate, Ukf, UkfError};
 use crate::math::{wrap_pi, Real};
 use crate::model::{
-    discrete_process_noise, ImuVec, Mat6, Measurement, MeasurementModel, ModelError, StateVec,
+    discrete_process_noise_from, ImuVec, Mat6, Measurement, MeasurementModel, ModelError, StateVec,
     VehicleModel, NX, NZ, ROLL, STATE_ANGLES, YAW,
 };
 use crate::stats::normal_upper_quantile;
@@ -290,9 +290,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
 
     fn predict(&mut self, u: &ImuVec<T>, dt: T) -> Result<bool, ModelError> {
         let x = *self.ukf.state();
-        let q = discrete_process_noise(&self.model, &x, u, &self.cfg.process_noise, dt)?;
-        let phi = self.model.transition(&x, u, dt)?;
+        let a = self.model.jacobian_state(&x, u)?;
         let b = self.model.jacobian_input(&x)?;
+        let q = discrete_process_noise_from(&a, &b, &self.cfg.process_noise, dt);
+        let ad = a * dt;
+        let phi = Mat6::identity() + ad + ad * ad * T::lit(0.5);
         let model = self.model;
         let reset = match self.ukf.predict(|s| model.step(s, u, dt), &q) {
             Ok(()) => false,
@@ -417,16 +419,15 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     fn after_update(&mut self, health: &Health) {
         let dt_learn = self.phase_time - self.learn_clock;
         self.learn_clock = self.phase_time;
-        let w_inst = self.latest_variance.map(|v| T::one() / v);
-        let instant = estimate_corrected(
-            &self.signature,
-            &w_inst,
-            &self.latest_innovation,
-            &[true; NZ],
-        );
+        // Instant estimate from the latest innovation of every channel; only
+        // computed when the learner or the drift tracker will use it.
+        let instant = |s: &Self| {
+            let w = s.latest_variance.map(|v| T::one() / v);
+            estimate_corrected(&s.signature, &w, &s.latest_innovation, &[true; NZ])
+        };
         match self.phase {
             Phase::Learning => {
-                if let Some(f) = instant {
+                if let Some(f) = instant(self) {
                     let k = (dt_learn / self.cfg.learn_tau_s).min(T::one());
                     self.nominal_bias += f * k;
                 }
@@ -440,7 +441,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                     .t_statistic
                     .iter()
                     .all(|t| t.abs() < self.t_threshold() * T::lit(0.5));
-                if let (true, Some(f)) = (quiet, instant) {
+                let estimate = if quiet { instant(self) } else { None };
+                if let Some(f) = estimate {
                     let k = dt_learn / self.cfg.drift_tau_s;
                     for ((b, df), lim) in self
                         .nominal_bias

@@ -110,6 +110,14 @@ enum Cmd {
         #[command(flatten)]
         detect: DetectOpts,
     },
+    /// First detection of every fault row of one seed, in the same format as the QEMU image prints (for diffing host vs target).
+    Detections {
+        /// Scenario name.
+        name: String,
+        /// Seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// Write a simulated run in the SPEC §10 replay format (with truth columns).
     Simulate {
         /// Scenario name.
@@ -325,6 +333,36 @@ fn main() -> Result<()> {
                 );
             }
             println!("detection rate counted where |fault| ≥ the scenario's minimum (0.1 m/s², 0.5 °/s) from L after it is reached");
+        }
+        Cmd::Detections { name, seed } => {
+            let scn = scenario(&name)?;
+            let opts = options(
+                &name,
+                &DetectOpts {
+                    detector: None,
+                    statistic: StatisticArg::Normalized,
+                    alpha: 1e-6,
+                },
+            );
+            let cfg = monitor_config::<f32>(&scn, &opts);
+            let mut monitor = imu_fdi::monitor::UkfMonitor::<f32>::new(cfg)
+                .map_err(|e| anyhow!("monitor configuration: {e:?}"))?;
+            let mut tally = hal_sim::setup::DetectionTally::new(&scn);
+            for s in hal_sim::Simulator::new(&scn, seed) {
+                let u =
+                    imu_fdi::model::ImuVec::from_fn(|i, _| s.imu.map_or(f32::NAN, |v| v[i] as f32));
+                let z = imu_fdi::model::MeasVec::from_fn(|i, _| s.aiding[i] as f32);
+                let r = monitor.step(
+                    &u,
+                    s.dt as f32,
+                    &imu_fdi::model::Measurement {
+                        z,
+                        available: s.aiding_available,
+                    },
+                );
+                tally.record(&s, &r);
+            }
+            tally.print(|line| println!("{line}"));
         }
         Cmd::Simulate { name, seed, out } => {
             let scn = scenario(&name)?;

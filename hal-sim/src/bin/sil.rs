@@ -125,6 +125,7 @@ fn main() -> ! {
         with_update.n
     );
     hprintln!("peak stack: {} bytes", stack_high_water());
+    profile();
     tally.print(|line| hprintln!("{}", line));
     if tally.all_detected() {
         hprintln!("OK: every S2 fault detected on its channel with the right sign");
@@ -148,4 +149,56 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
     hprintln!("panic: {}", info);
     debug::exit(debug::EXIT_FAILURE);
     loop {}
+}
+
+/// Instruction cost of the pieces of one monitor step, for profiling.
+fn profile() {
+    use imu_fdi::filter::{SigmaParams, Ukf};
+    use imu_fdi::math::{cholesky, sin_cos_f32};
+    use imu_fdi::model::{
+        discrete_process_noise_from, ImuNoisePsd, Mat6, StateVec, VehicleModel, STATE_ANGLES,
+    };
+    let m = VehicleModel::<f32>::default();
+    let x = core::hint::black_box(StateVec::new(2.0, 0.1, -0.05, 0.05, 0.1, 1.0));
+    let u = core::hint::black_box(ImuVec::new(0.1, 0.2, -9.7, 0.01, 0.02, 0.05));
+    let p = Mat6::<f32>::from_diagonal_element(1e-4);
+    macro_rules! cost {
+        ($name:expr, $e:expr) => {{
+            let t0 = instructions();
+            let r = core::hint::black_box($e);
+            let c = instructions().wrapping_sub(t0);
+            hprintln!("  {:<28} {:>6}", $name, c);
+            r
+        }};
+    }
+    hprintln!("profile (instructions, one call):");
+    cost!("sin_cos_f32", sin_cos_f32(core::hint::black_box(0.3)));
+    cost!("libm::sqrtf", libm::sqrtf(core::hint::black_box(0.3)));
+    let _ = cost!("model.derivative", m.derivative(&x, &u));
+    let _ = cost!("model.step (RK2)", m.step(&x, &u, 0.01));
+    let a = cost!(
+        "jacobian_state",
+        m.jacobian_state(&x, &u).unwrap_or_default()
+    );
+    let b = cost!("jacobian_input", m.jacobian_input(&x).unwrap_or_default());
+    cost!("6x6 matmul", a * b);
+    cost!(
+        "process noise Q",
+        discrete_process_noise_from(&a, &b, &ImuNoisePsd::uniform(6e-5, 2e-7), 0.01)
+    );
+    let _ = cost!("cholesky 6x6", cholesky(&p));
+    let _ = cost!("nalgebra Cholesky 6x6", nalgebra::Cholesky::new(p));
+    let mut q = p;
+    let _ = cost!("ger rank-1 6x6", q.ger(0.1, &x, &x, 1.0));
+    let _ = cost!("outer d*d^T*w", p + x * x.transpose() * 0.1);
+    let mut ukf = Ukf::<f32, 6, 13>::new(x, p, &SigmaParams::default(), STATE_ANGLES)
+        .unwrap_or_else(|| loop {});
+    let _ = cost!(
+        "ukf.predict (model.step)",
+        ukf.predict(|s| m.step(s, &u, 0.01), &p)
+    );
+    let _ = cost!(
+        "ukf.predict (identity)",
+        ukf.predict(|s| Ok::<_, ()>(*s), &p)
+    );
 }
