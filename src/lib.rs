@@ -32,6 +32,7 @@
 
 pub mod detect;
 pub mod filter;
+pub mod imu;
 pub mod math;
 pub mod model;
 pub mod monitor;

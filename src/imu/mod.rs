@@ -1,0 +1,38 @@
+//! IMU drivers: the [`Imu`] trait the monitor is fed through, and a real
+//! driver for the TDK InvenSense ICM-42688-P over `embedded_hal::spi::SpiDevice`.
+
+pub mod icm42688;
+
+pub use icm42688::{AccelRange, Config, Error as Icm42688Error, GyroRange, Icm42688, Odr};
+
+/// One IMU sample in SI units, in the sensor's axes.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ImuSample {
+    /// Specific force `[x, y, z]`, m/s².
+    pub accel: [f32; 3],
+    /// Angular rate `[x, y, z]`, rad/s.
+    pub gyro: [f32; 3],
+    /// Die temperature, °C.
+    pub temperature: f32,
+    /// Count of samples read since the driver started (wraps); a gap in the
+    /// sequence seen by the caller means a missed period.
+    pub sequence: u32,
+}
+
+impl ImuSample {
+    /// The sample in the monitor's channel order `[a_x, a_y, a_z, p, q, r]`.
+    pub fn channels(&self) -> [f32; 6] {
+        let [ax, ay, az] = self.accel;
+        let [p, q, r] = self.gyro;
+        [ax, ay, az, p, q, r]
+    }
+}
+
+/// A source of IMU samples.
+pub trait Imu {
+    /// Why a read failed.
+    type Error;
+    /// Reads the latest sample (one bus transaction, never torn).
+    fn read(&mut self) -> Result<ImuSample, Self::Error>;
+}

@@ -1,0 +1,152 @@
+//! ICM-42688-P driver against mocked SPI transactions: the exact register
+//! sequence, scaling, the "no data" value and bus errors.
+
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic,
+    clippy::needless_range_loop
+)] // test code: a panic is a failed assertion
+
+use embedded_hal::spi::ErrorKind;
+use embedded_hal_mock::eh1::delay::NoopDelay;
+use embedded_hal_mock::eh1::spi::{Mock, Transaction as T};
+use imu_fdi::imu::icm42688::{reg, Config, Error, Icm42688, DEVICE_ID};
+use imu_fdi::imu::Imu;
+
+fn read_reg(addr: u8, value: u8) -> Vec<T<u8>> {
+    vec![
+        T::transaction_start(),
+        T::write(addr | 0x80),
+        T::read(value),
+        T::transaction_end(),
+    ]
+}
+
+fn write_reg(addr: u8, value: u8) -> Vec<T<u8>> {
+    vec![
+        T::transaction_start(),
+        T::write_vec(vec![addr, value]),
+        T::transaction_end(),
+    ]
+}
+
+fn init_sequence() -> Vec<T<u8>> {
+    let mut t = read_reg(reg::WHO_AM_I, DEVICE_ID);
+    t.extend(write_reg(reg::DEVICE_CONFIG, 0x01));
+    t.extend(write_reg(reg::REG_BANK_SEL, 0));
+    t.extend(read_reg(reg::WHO_AM_I, DEVICE_ID));
+    // ±2000 °/s, ±16 g, 1 kHz (0b0110), bandwidth code 1 for both.
+    t.extend(write_reg(reg::GYRO_CONFIG0, 0b0000_0110));
+    t.extend(write_reg(reg::ACCEL_CONFIG0, 0b0000_0110));
+    t.extend(write_reg(reg::GYRO_ACCEL_CONFIG0, 0x11));
+    t.extend(write_reg(reg::PWR_MGMT0, 0x0F));
+    t
+}
+
+fn burst(words: [i16; 7]) -> Vec<T<u8>> {
+    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_be_bytes()).collect();
+    vec![
+        T::transaction_start(),
+        T::write(reg::TEMP_DATA1 | 0x80),
+        T::read_vec(bytes),
+        T::transaction_end(),
+    ]
+}
+
+#[test]
+fn initialises_with_the_documented_register_sequence() {
+    let mut spi = Mock::new(&init_sequence());
+    let dev = Icm42688::new(spi.clone(), Config::default(), &mut NoopDelay::new()).unwrap();
+    drop(dev.destroy());
+    spi.done();
+}
+
+#[test]
+fn wrong_identity_is_reported() {
+    let mut spi = Mock::new(&read_reg(reg::WHO_AM_I, 0x12));
+    let r = Icm42688::new(spi.clone(), Config::default(), &mut NoopDelay::new());
+    assert_eq!(r.err(), Some(Error::WrongDevice(0x12)));
+    spi.done();
+}
+
+#[test]
+fn one_burst_is_scaled_big_endian_with_sign() {
+    let mut t = init_sequence();
+    // temp 0 → 25 °C; accel z = −2048 LSB = −1 g at ±16 g; gyro x = +3277 LSB ≈ 200 °/s, gyro z = −32767.
+    t.extend(burst([0, 0, 1, -2048, 3277, 0, -32767]));
+    t.extend(burst([1325, 0, 0, 2048, 0, 0, 0]));
+    let mut spi = Mock::new(&t);
+    let mut dev = Icm42688::new(spi.clone(), Config::default(), &mut NoopDelay::new()).unwrap();
+    let s = dev.read().unwrap();
+    assert_eq!(s.sequence, 0);
+    assert!((s.temperature - 25.0).abs() < 1e-6);
+    assert!((s.accel[2] + 9.80665).abs() < 1e-5, "{}", s.accel[2]);
+    assert!((s.accel[1] - 9.80665 * 16.0 / 32768.0).abs() < 1e-7);
+    assert!((s.gyro[0].to_degrees() - 3277.0 * 2000.0 / 32768.0).abs() < 1e-3);
+    assert!((s.gyro[2].to_degrees() + 32767.0 * 2000.0 / 32768.0).abs() < 1e-2);
+    let s = dev.read().unwrap();
+    assert_eq!(s.sequence, 1);
+    assert!((s.temperature - (1325.0 / 132.48 + 25.0)).abs() < 1e-4);
+    drop(dev.destroy());
+    spi.done();
+}
+
+#[test]
+fn no_data_value_is_an_error() {
+    let mut t = init_sequence();
+    t.extend(burst([0, 0, 0, 0, i16::MIN, 0, 0]));
+    let mut spi = Mock::new(&t);
+    let mut dev = Icm42688::new(spi.clone(), Config::default(), &mut NoopDelay::new()).unwrap();
+    assert_eq!(dev.read(), Err(Error::NoData));
+    drop(dev.destroy());
+    spi.done();
+}
+
+/// embedded-hal-mock 0.11 cannot inject SPI errors: this wrapper fails the
+/// `fail_at`-th transaction (0-based) without touching the bus.
+struct Flaky<S> {
+    inner: S,
+    calls: usize,
+    fail_at: usize,
+}
+
+impl<S> embedded_hal::spi::ErrorType for Flaky<S> {
+    type Error = ErrorKind;
+}
+
+impl<S: embedded_hal::spi::SpiDevice<u8, Error = ErrorKind>> embedded_hal::spi::SpiDevice<u8>
+    for Flaky<S>
+{
+    fn transaction(
+        &mut self,
+        ops: &mut [embedded_hal::spi::Operation<'_, u8>],
+    ) -> Result<(), ErrorKind> {
+        let n = self.calls;
+        self.calls += 1;
+        if n == self.fail_at {
+            return Err(ErrorKind::ChipSelectFault);
+        }
+        self.inner.transaction(ops)
+    }
+}
+
+#[test]
+fn bus_errors_are_typed_and_recoverable() {
+    let mut t = init_sequence();
+    let init_calls = 8;
+    t.extend(burst([0, 0, 0, -2048, 0, 0, 0]));
+    let mut spi = Mock::new(&t);
+    let flaky = Flaky {
+        inner: spi.clone(),
+        calls: 0,
+        fail_at: init_calls,
+    };
+    let mut dev = Icm42688::new(flaky, Config::default(), &mut NoopDelay::new()).unwrap();
+    assert_eq!(dev.read(), Err(Error::Spi(ErrorKind::ChipSelectFault)));
+    // The next period reads normally.
+    assert!(dev.read().is_ok());
+    drop(dev.destroy());
+    spi.done();
+}
