@@ -9,6 +9,7 @@
 //! replay format ([`replay`]) and the `imu-fdi-sim` CLI.
 #![cfg_attr(not(feature = "std"), no_std)]
 
+pub mod emulated_icm42688;
 pub mod fault;
 pub mod imu_model;
 pub mod scenario;

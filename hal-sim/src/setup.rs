@@ -105,6 +105,11 @@ impl DetectionTally {
         self.rows.iter().all(|(_, f)| f.is_some())
     }
 
+    /// First detection time of each row (None: not detected).
+    pub fn first_detections(&self) -> heapless::Vec<Option<f64>, MAX_FAULTS> {
+        self.rows.iter().map(|(_, f)| *f).collect()
+    }
+
     /// Number of rows detected, of all rows.
     pub fn counts(&self) -> (usize, usize) {
         (
