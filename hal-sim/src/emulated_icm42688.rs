@@ -118,10 +118,7 @@ impl EmulatedIcm42688 {
             // The chip saturates at ±32767; −32768 is reserved for "no data".
             c.clamp(-32767.0, 32767.0) as i16
         };
-        let (accel, gyro, temp) = match self.sample {
-            Some(s) => s,
-            None => ([0.0; 3], [0.0; 3], 25.0),
-        };
+        let (accel, gyro, temp) = self.sample.unwrap_or(([0.0; 3], [0.0; 3], 25.0));
         let alsb = self.accel_fs_g() * G0 / 32768.0;
         let glsb = self.gyro_fs_dps() * DEG / 32768.0;
         let t = counts(temp - 25.0, 1.0 / 132.48);
