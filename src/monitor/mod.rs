@@ -3,8 +3,10 @@
 
 mod config;
 mod report;
+mod task;
 mod ukf_monitor;
 
 pub use config::{ConfigError, UkfMonitorConfig};
 pub use report::{ChannelState, Health, Phase, Report};
+pub use task::{Monitor, TaskReport};
 pub use ukf_monitor::{UkfMonitor, DEFAULT_WINDOW, MAX_DELAY_STEPS};

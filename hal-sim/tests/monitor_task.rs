@@ -1,0 +1,78 @@
+//! The periodic `Monitor` task with the real ICM-42688-P driver on the
+//! emulated chip, through S2 with 2 % of the SPI reads failing.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)] // test code
+
+use core::cell::RefCell;
+
+use embedded_hal_mock::eh1::delay::NoopDelay;
+use hal_sim::emulated_icm42688::{EmulatedIcm42688, SharedBus};
+use hal_sim::runner::{monitor_config, RunOptions};
+use hal_sim::{Scenario, Simulator};
+use imu_fdi::imu::icm42688::{AccelRange, Config, GyroRange, Icm42688, Odr};
+use imu_fdi::model::{MeasVec, Measurement};
+use imu_fdi::monitor::{Monitor, Phase};
+use rand::{Rng, SeedableRng};
+
+#[test]
+fn s2_with_two_percent_failed_reads_still_detects_every_fault() {
+    let scn = Scenario::s2();
+    let chip = RefCell::new(EmulatedIcm42688::new());
+    let cfg = Config {
+        gyro_range: GyroRange::Dps250,
+        accel_range: AccelRange::G4,
+        odr: Odr::Hz100,
+        ui_filter_bw: 1,
+    };
+    let imu = Icm42688::new(SharedBus(&chip), cfg, &mut NoopDelay::new()).unwrap();
+    let mut task = Monitor::<_>::new(imu, monitor_config(&scn, &RunOptions::default())).unwrap();
+    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(9);
+    let (mut injected, mut detected, mut false_flags) = (0u32, [false; 6], 0u32);
+    let mut last = None;
+    for s in Simulator::new(&scn, 1) {
+        let imu = s.imu.unwrap();
+        chip.borrow_mut()
+            .set_sample([imu[0], imu[1], imu[2]], [imu[3], imu[4], imu[5]], 25.0);
+        if rng.random::<f64>() < 0.02 {
+            chip.borrow_mut().fail_next(1);
+            injected += 1;
+        }
+        let z = MeasVec::from_fn(|i, _| s.aiding[i] as f32);
+        let r = task.step(
+            s.dt as f32,
+            &Measurement {
+                z,
+                available: s.aiding_available,
+            },
+        );
+        assert!(r
+            .fault_estimate
+            .iter()
+            .chain(r.corrected.iter())
+            .all(|v| v.is_finite()));
+        for c in 0..6 {
+            let flag = r.status[c].sign().unwrap_or(0);
+            if s.fault[c] != 0.0 && flag == if s.fault[c] > 0.0 { 1 } else { -1 } {
+                detected[c] = true;
+            }
+            let any_fault_recent = scn
+                .faults
+                .iter()
+                .any(|f| s.t >= f.start && s.t < f.end + 4.4);
+            if r.phase == Phase::Monitoring && !any_fault_recent && flag != 0 {
+                false_flags += 1;
+            }
+        }
+        last = Some(r);
+    }
+    let r = last.unwrap();
+    println!("read failures injected {injected}, counted {}; detected {detected:?}; false flags {false_flags}", r.read_failures);
+    assert_eq!(r.read_failures, injected);
+    assert!(injected > 80);
+    assert_eq!(detected, [true; 6]);
+    assert_eq!(false_flags, 0);
+}
