@@ -241,7 +241,8 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
     /// spread by the current covariance around the delayed state, and the
     /// correction is applied to the current state. This is the usual
     /// short-delay approximation: it assumes the covariance changes little
-    /// over the delay, which holds for delays of a few IMU periods.
+    /// over the delay, which holds for delays of a few IMU periods. With
+    /// `delayed` equal to the current state it is [`update`](Self::update).
     #[allow(clippy::too_many_arguments)]
     pub fn update_delayed<const M: usize, E>(
         &mut self,

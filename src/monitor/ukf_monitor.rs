@@ -332,26 +332,17 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         } else {
             None
         };
-        let h_fn = |s: &StateVec<T>| Ok(meas.predict(s, omega));
-        let out = match delayed {
-            Some(xd) => self.ukf.update_delayed(
-                &xd,
-                &aiding.z,
-                &available,
-                h_fn,
-                &r,
-                &MEAS_ANGLES,
-                &mut self.gate,
-            )?,
-            None => self.ukf.update(
-                &aiding.z,
-                &available,
-                h_fn,
-                &r,
-                &MEAS_ANGLES,
-                &mut self.gate,
-            )?,
-        };
+        // Centred on the current state this is the ordinary update.
+        let center = delayed.unwrap_or(x_prior);
+        let out = self.ukf.update_delayed(
+            &center,
+            &aiding.z,
+            &available,
+            |s| Ok(meas.predict(s, omega)),
+            &r,
+            &MEAS_ANGLES,
+            &mut self.gate,
+        )?;
         let hx = h * self.sensitivity;
         let record = self.saturation_holdoff <= T::zero();
         let mut rejected = false;
