@@ -99,3 +99,19 @@ fn unknown_scenario_is_a_clear_error() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown scenario 's9'"));
 }
+
+#[test]
+fn closed_stdout_ends_quietly_instead_of_panicking() {
+    use std::process::Stdio;
+    let mut child = bin()
+        .args(["scenario", "s1", "--seeds", "3"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take()); // like `| head -0`
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(out.status.success());
+}

@@ -10,6 +10,31 @@ use hal_sim::Scenario;
 use imu_fdi::detect::{Detector, Statistic};
 use imu_fdi::monitor::UkfMonitorConfig;
 
+/// `println!` that ends the program quietly when stdout is closed (e.g.
+/// piped into `head`) instead of panicking on the broken pipe.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        if let Err(e) = writeln!(std::io::stdout().lock(), $($arg)*) {
+            if e.kind() == std::io::ErrorKind::BrokenPipe {
+                std::process::exit(0);
+            }
+        }
+    }};
+}
+
+/// `print!` counterpart of [`out!`].
+macro_rules! out_nl {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        if let Err(e) = write!(std::io::stdout().lock(), $($arg)*) {
+            if e.kind() == std::io::ErrorKind::BrokenPipe {
+                std::process::exit(0);
+            }
+        }
+    }};
+}
+
 #[derive(Parser)]
 #[command(
     name = "imu-fdi-sim",
@@ -196,7 +221,7 @@ fn print_run(
     opts: &RunOptions,
 ) -> Result<RunMetrics> {
     let m = campaign(scn, first, seeds, opts)?;
-    println!(
+    out!(
         "== {title}: {} seeds {}..{}, detector {:?}, statistic {:?}, α = {:e} (f32 monitor)",
         scn.name,
         first,
@@ -205,8 +230,8 @@ fn print_run(
         opts.statistic,
         opts.alpha
     );
-    print!("{}", m.table());
-    println!();
+    out_nl!("{}", m.table());
+    out!();
     Ok(m)
 }
 
@@ -227,12 +252,12 @@ fn main() -> Result<()> {
                 let t = run::<f32>(&scn, seed, &opts)
                     .map_err(|e| anyhow!("monitor configuration: {e:?}"))?;
                 t.write_csv(&p)?;
-                println!("wrote trace of seed {seed} to {}", p.display());
+                out!("wrote trace of seed {seed} to {}", p.display());
             }
             let m = print_run("scenario", &scn, seed, seeds.max(1), &opts)?;
             if let Some(p) = json {
                 std::fs::write(&p, serde_json::to_string_pretty(&m)?)?;
-                println!("wrote {}", p.display());
+                out!("wrote {}", p.display());
             }
         }
         Cmd::Demo { seeds } => {
@@ -261,7 +286,7 @@ fn main() -> Result<()> {
                     ..base
                 },
             )?;
-            println!(
+            out!(
                 "summary: S1 false alarms {}, S2 false alarms {}, S2 paper-matrix false alarms {}",
                 a.total_false_alarms(),
                 b.total_false_alarms(),
@@ -276,11 +301,14 @@ fn main() -> Result<()> {
         } => {
             let base = scenario(&name)?;
             let opts = options(&name, &detect);
-            println!(
+            out!(
                 "sweep of {}: fault sizes × factor, {} seeds each, detector {:?}, statistic {:?}",
-                base.name, seeds, opts.detector, opts.statistic
+                base.name,
+                seeds,
+                opts.detector,
+                opts.statistic
             );
-            println!(
+            out!(
                 "{:>7}  {:>20}  {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}  {:>9} {:>8}",
                 "factor",
                 "sizes a,b,c (acc)",
@@ -318,7 +346,7 @@ fn main() -> Result<()> {
                     .filter_map(|c| c.wrong_channel_rate())
                     .fold(0.0, f64::max);
                 let a = scn.sizes.accel;
-                println!(
+                out!(
                     "{:>7}  {:>20}  {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}  {:>8.2}% {:>8}",
                     f,
                     format!("{:.3},{:.3},{:.2}", a[0], a[1], a[2]),
@@ -332,7 +360,7 @@ fn main() -> Result<()> {
                     m.false_alarm_events
                 );
             }
-            println!("detection rate counted where |fault| ≥ the scenario's minimum (0.1 m/s², 0.5 °/s) from L after it is reached");
+            out!("detection rate counted where |fault| ≥ the scenario's minimum (0.1 m/s², 0.5 °/s) from L after it is reached");
         }
         Cmd::Detections { name, seed } => {
             let scn = scenario(&name)?;
@@ -362,12 +390,12 @@ fn main() -> Result<()> {
                 );
                 tally.record(&s, &r);
             }
-            tally.print(|line| println!("{line}"));
+            tally.print(|line| out!("{line}"));
         }
         Cmd::Simulate { name, seed, out } => {
             let scn = scenario(&name)?;
             let n = hal_sim::replay::write_simulated(&scn, seed, &out)?;
-            println!(
+            out!(
                 "wrote {n} rows of {} (seed {seed}) to {}",
                 scn.name,
                 out.display()
@@ -385,18 +413,20 @@ fn main() -> Result<()> {
             cfg.detector = opts.detector;
             let s =
                 hal_sim::replay::replay(&input, out.as_deref(), summary.as_deref(), cfg, grace)?;
-            println!("replayed {} rows ({} skipped, {} IMU rows rejected), aiding {}, monitoring from {:?} s", s.rows, s.skipped_rows, s.rejected_imu_rows, s.aiding, s.monitoring_from_s);
+            out!("replayed {} rows ({} skipped, {} IMU rows rejected), aiding {}, monitoring from {:?} s", s.rows, s.skipped_rows, s.rejected_imu_rows, s.aiding, s.monitoring_from_s);
             for c in &s.channels {
-                println!(
+                out!(
                     "  {:<3} flagged {:>6} samples, first at {:?} s",
-                    c.channel, c.flagged_samples, c.first_detection_s
+                    c.channel,
+                    c.flagged_samples,
+                    c.first_detection_s
                 );
             }
             if let Some(p) = out {
-                println!("wrote {}", p.display());
+                out!("wrote {}", p.display());
             }
             if let Some(p) = summary {
-                println!("wrote {}", p.display());
+                out!("wrote {}", p.display());
             }
         }
     }
