@@ -1,0 +1,136 @@
+//! imu-fdi firmware for an STM32F405 flight controller with an ICM-42688-P
+//! on SPI1 (SCK PA5, MISO PA6, MOSI PA7, CS PA4), 8 MHz HSE, 168 MHz core.
+//!
+//! A hardware timer (TIM2) paces the monitor task at 100 Hz; each period the
+//! measured `dt` (DWT cycle counter) goes with the IMU sample into
+//! [`imu_fdi::monitor::Monitor`], and a one-line report is logged over RTT
+//! with defmt once per second. Panics and HardFaults are reported and stop.
+//!
+//! Aiding: this image is the bench build — the board is assumed at rest, so
+//! zero body velocity and the accelerometer's levelling (roll, pitch; heading
+//! held at 0) are fed as M1 aiding at 10 Hz. On a vehicle, replace
+//! `bench_aiding` with the DVL/compass or GNSS receiver.
+//!
+//! Build: `cargo build-firmware`; flash and run with probe-rs:
+//! `probe-rs run --chip STM32F405RGTx target/thumbv7em-none-eabihf/release/firmware`.
+#![no_std]
+#![no_main]
+
+use cortex_m_rt::{entry, exception, ExceptionFrame};
+use defmt_rtt as _;
+use embedded_hal_bus::spi::ExclusiveDevice;
+use imu_fdi::imu::icm42688::{AccelRange, Config, GyroRange, Icm42688, Odr};
+use imu_fdi::model::{MeasVec, Measurement};
+use imu_fdi::monitor::{Monitor, UkfMonitorConfig};
+use panic_probe as _;
+use stm32f4xx_hal::{pac, prelude::*, rcc, spi::Mode};
+
+const RATE_HZ: u32 = 100;
+const AIDING_EVERY: u32 = 10;
+
+/// Bench aiding: at rest, velocity 0 and attitude from the accelerometer.
+fn bench_aiding(accel: [f32; 3]) -> Measurement<f32> {
+    let [ax, ay, az] = accel;
+    // Specific force at rest is (g sinθ, −g cosθ sinφ, −g cosθ cosφ).
+    let roll = libm::atan2f(-ay, -az);
+    let pitch = libm::atan2f(ax, libm::sqrtf(ay * ay + az * az));
+    Measurement {
+        z: MeasVec::new(0.0, 0.0, 0.0, roll, pitch, 0.0),
+        available: [true; 6],
+    }
+}
+
+#[entry]
+fn main() -> ! {
+    let (Some(dp), Some(mut cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
+        defmt::panic!("peripherals already taken");
+    };
+    let mut rcc = dp.RCC.freeze(rcc::Config::hse(8.MHz()).sysclk(168.MHz()));
+    let sysclk = rcc.clocks.sysclk().raw() as f32;
+    cp.DCB.enable_trace();
+    cp.DWT.enable_cycle_counter();
+
+    let gpioa = dp.GPIOA.split(&mut rcc);
+    let sck = gpioa.pa5.into_alternate();
+    let miso = gpioa.pa6.into_alternate();
+    let mosi = gpioa.pa7.into_alternate();
+    let cs = gpioa.pa4.into_push_pull_output();
+    let bus = dp.SPI1.spi(
+        (Some(sck), Some(miso), Some(mosi)),
+        Mode::from(embedded_hal::spi::MODE_3),
+        8.MHz(),
+        &mut rcc,
+    );
+    // The HAL's output pin cannot fail (`Infallible`).
+    let Ok(spi) = ExclusiveDevice::new_no_delay(bus, cs);
+    let mut delay = dp.TIM5.delay_us(&mut rcc);
+    let imu_cfg = Config {
+        gyro_range: GyroRange::Dps2000,
+        accel_range: AccelRange::G16,
+        odr: Odr::Hz1000,
+        ui_filter_bw: 1,
+    };
+    let imu = match Icm42688::new(spi, imu_cfg, &mut delay) {
+        Ok(imu) => imu,
+        Err(imu_fdi::imu::icm42688::Error::WrongDevice(id)) => {
+            defmt::panic!("ICM-42688-P: WHO_AM_I = {=u8:#04x}", id)
+        }
+        Err(imu_fdi::imu::icm42688::Error::NoData) => defmt::panic!("ICM-42688-P: no data"),
+        Err(imu_fdi::imu::icm42688::Error::Spi(_)) => defmt::panic!("ICM-42688-P: SPI bus error"),
+    };
+    let mut cfg = UkfMonitorConfig::<f32>::auv();
+    cfg.imu_period = 1.0 / RATE_HZ as f32;
+    let mut task: Monitor<_> = match Monitor::new(imu, cfg) {
+        Ok(t) => t,
+        Err(e) => defmt::panic!("monitor configuration: {}", e),
+    };
+
+    let mut timer = dp.TIM2.counter_hz(&mut rcc);
+    if timer.start(RATE_HZ.Hz()).is_err() {
+        defmt::panic!("timer");
+    }
+    defmt::info!("imu-fdi: monitoring at {} Hz", RATE_HZ);
+    let mut last = cortex_m::peripheral::DWT::cycle_count();
+    let mut n: u32 = 0;
+    let mut last_accel = [0.0f32, 0.0, -9.806_65];
+    loop {
+        // Sleep-free busy wait for the next period (the task owns the core).
+        while timer.wait().is_err() {}
+        let now = cortex_m::peripheral::DWT::cycle_count();
+        let dt = now.wrapping_sub(last) as f32 / sysclk;
+        last = now;
+        let aiding = if n % AIDING_EVERY == 0 {
+            bench_aiding(last_accel)
+        } else {
+            Measurement::none()
+        };
+        let t0 = cortex_m::peripheral::DWT::cycle_count();
+        let r = task.step(dt, &aiding);
+        let cycles = cortex_m::peripheral::DWT::cycle_count().wrapping_sub(t0);
+        if !r.read_failed {
+            last_accel = [r.corrected[0], r.corrected[1], r.corrected[2]];
+        }
+        if n % RATE_HZ == 0 {
+            defmt::info!(
+                "t={}s {} status={} fault={} health={} reads failed={} step={} cycles",
+                n / RATE_HZ,
+                r.phase,
+                r.status,
+                r.fault_estimate,
+                r.health,
+                r.read_failures,
+                cycles
+            );
+        }
+        n = n.wrapping_add(1);
+    }
+}
+
+#[exception]
+#[allow(unsafe_code)] // cortex-m-rt's HardFault handler signature is `unsafe fn`
+unsafe fn HardFault(ef: &ExceptionFrame) -> ! {
+    defmt::error!("HardFault at pc {=u32:#010x}", ef.pc());
+    loop {
+        cortex_m::asm::bkpt();
+    }
+}
