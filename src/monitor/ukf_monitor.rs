@@ -304,7 +304,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         };
         self.sensitivity = phi * self.sensitivity + b * dt;
         self.last_input_b = b;
-        self.history.write(*self.ukf.state());
+        // The state history only serves a configured aiding latency.
+        if self.delay_steps > 0 {
+            self.history.write(*self.ukf.state());
+        }
         Ok(reset)
     }
 
