@@ -3,7 +3,10 @@
 use nalgebra::{SMatrix, SVector};
 
 use super::{ChannelDiag, Gate, SigmaParams, SigmaWeights};
-use crate::math::{cholesky, cholesky_solve_right, symmetrize, wrap_pi, LinalgError, Real};
+use crate::math::{
+    add_outer_lower, cholesky, cholesky_solve_right, mirror_lower, symmetrize, wrap_pi,
+    LinalgError, Real,
+};
 
 /// Why a UKF step did not complete normally.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -21,6 +24,18 @@ pub enum UkfError<E> {
     InnovationCovariance(LinalgError),
     /// The result contained NaN or infinity; the filter is unchanged.
     NonFinite,
+}
+
+impl UkfError<core::convert::Infallible> {
+    /// The same error as the error type of a fallible model.
+    pub fn widen<E>(self) -> UkfError<E> {
+        match self {
+            Self::Model(never) => match never {},
+            Self::CovarianceReset(e) => UkfError::CovarianceReset(e),
+            Self::InnovationCovariance(e) => UkfError::InnovationCovariance(e),
+            Self::NonFinite => UkfError::NonFinite,
+        }
+    }
 }
 
 /// What an update produced.
@@ -156,6 +171,16 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         pts
     }
 
+    /// Sigma point `k` of `center` with the pre-scaled factor `gl = γL`:
+    /// the centre, then `+` and `−` each column.
+    fn sigma_point(center: &SVector<T, N>, gl: &SMatrix<T, N, N>, k: usize) -> SVector<T, N> {
+        match k {
+            0 => *center,
+            k if k <= N => center + gl.column(k - 1),
+            k => center - gl.column((k - 1 - N).min(N.saturating_sub(1))),
+        }
+    }
+
     /// Factorises `P`, re-initialising it once if that fails.
     fn factor(&mut self) -> (SMatrix<T, N, N>, Option<LinalgError>) {
         match cholesky(&self.p) {
@@ -193,17 +218,33 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         q: &SMatrix<T, N, N>,
     ) -> Result<(), UkfError<E>> {
         let (l, failure) = self.factor();
-        let chi = self.sigma_points(&self.x, &l);
-        let mut y = chi;
-        for (out, pt) in y.iter_mut().zip(chi.iter()) {
-            *out = f(pt).map_err(UkfError::Model)?;
+        let gl = l * self.weights.gamma;
+        let mut y = [SVector::<T, N>::zeros(); S];
+        for (k, out) in y.iter_mut().enumerate() {
+            *out = f(&Self::sigma_point(&self.x, &gl, k)).map_err(UkfError::Model)?;
         }
-        let mean = weighted_mean(&y, &self.weights.wm, &self.angles);
+        // Deviations from the first point, wrapped once: `e_k = y_k ⊖ y_0`.
+        // The circular mean is `y_0 ⊕ ē` with `ē = Σ wm_k e_k`, and the
+        // deviations from the mean are `e_k − ē` — already on the right
+        // branch, so no second wrap (this halves the wrapping work).
+        let reference = y.first().copied().unwrap_or_else(SVector::zeros);
+        let mut offset = SVector::<T, N>::zeros();
+        for (pt, w) in y.iter_mut().zip(self.weights.wm.iter()) {
+            *pt = diff(pt, &reference, &self.angles);
+            offset += *pt * *w;
+        }
+        let mut mean = reference + offset;
+        for (v, is_angle) in mean.iter_mut().zip(self.angles.iter()) {
+            if *is_angle {
+                *v = wrap_pi(*v);
+            }
+        }
+        // Accumulate the lower triangle only (the result is symmetric).
         let mut p = *q;
-        for (pt, w) in y.iter().zip(self.weights.wc.iter()) {
-            let d = diff(pt, &mean, &self.angles);
-            p += d * d.transpose() * *w;
+        for (e, w) in y.iter().zip(self.weights.wc.iter()) {
+            add_outer_lower(&mut p, &(e - offset), *w);
         }
+        mirror_lower(&mut p);
         if !(mean.iter().all(|v| v.finite()) && p.iter().all(|v| v.finite())) {
             return Err(UkfError::NonFinite);
         }
@@ -283,7 +324,56 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
             pzz += dz * dz.transpose() * *w;
             pxz += dx * dz.transpose() * *w;
         }
-        let nu_all = diff(z, &z_hat, meas_angles);
+        self.correct(z, &z_hat, pzz, pxz, available, meas_angles, gate, failure)
+    }
+
+    /// Update with a measurement that is affine in the state,
+    /// `h(x) = H x + c`, given `z_center = h(center)` (`center` being the
+    /// current state, or the delayed one as in
+    /// [`update_delayed`](Self::update_delayed)).
+    ///
+    /// The unscented transform of an affine map is exact — the sigma points
+    /// reproduce the mean and `P` — so the sigma-point update reduces to the
+    /// Kalman form `P_zz = H P Hᵀ + R`, `P_xz = P Hᵀ` with the same gating,
+    /// masking and angle handling; it equals [`update_delayed`](Self::update_delayed)
+    /// to rounding (tested) at a fraction of the cost. The DVL + compass
+    /// model (M1) is affine: `H = I`, `c` the lever-arm velocity.
+    #[allow(clippy::too_many_arguments)]
+    pub fn update_affine<const M: usize>(
+        &mut self,
+        z_center: &SVector<T, M>,
+        h: &SMatrix<T, M, N>,
+        z: &SVector<T, M>,
+        available: &[bool; M],
+        r: &SVector<T, M>,
+        meas_angles: &[bool; M],
+        gate: &mut Gate<T, M>,
+    ) -> Result<UpdateOutput<T, N, M>, UkfError<core::convert::Infallible>> {
+        let pxz = self.p * h.transpose();
+        let mut pzz = h * pxz;
+        for (i, ri) in r.iter().enumerate() {
+            if let Some(d) = pzz.get_mut((i, i)) {
+                *d += *ri;
+            }
+        }
+        symmetrize(&mut pzz);
+        self.correct(z, z_center, pzz, pxz, available, meas_angles, gate, None)
+    }
+
+    /// The Kalman correction shared by both update forms.
+    #[allow(clippy::too_many_arguments)]
+    fn correct<const M: usize, E>(
+        &mut self,
+        z: &SVector<T, M>,
+        z_hat: &SVector<T, M>,
+        mut pzz: SMatrix<T, M, M>,
+        mut pxz: SMatrix<T, N, M>,
+        available: &[bool; M],
+        meas_angles: &[bool; M],
+        gate: &mut Gate<T, M>,
+        failure: Option<LinalgError>,
+    ) -> Result<UpdateOutput<T, N, M>, UkfError<E>> {
+        let nu_all = diff(z, z_hat, meas_angles);
         let mut diag = [ChannelDiag::<T>::default(); M];
         let mut nu = SVector::<T, M>::zeros();
         for (i, d) in diag.iter_mut().enumerate() {

@@ -12,11 +12,12 @@ const TWO_PI_TAIL: f64 = core::f64::consts::TAU - TWO_PI_HEAD;
 /// the caller's NaN check still sees it.
 #[inline]
 pub fn wrap_pi<T: Real>(a: T) -> T {
-    if !a.finite() {
+    let pi = T::pi();
+    // Fast path first (the common case; NaN fails the comparison).
+    if a > -pi && a <= pi {
         return a;
     }
-    let pi = T::pi();
-    if a > -pi && a <= pi {
+    if !a.finite() {
         return a;
     }
     let turns = (a / T::two_pi()).round();

@@ -5,9 +5,14 @@
 mod angle;
 mod cholesky;
 mod real;
+mod sqrt;
 mod trig;
 
 pub use angle::{wrap_pi, wrap_pi_f64};
-pub use cholesky::{cholesky, cholesky_solve_right, symmetrize, LinalgError};
+pub use cholesky::{
+    add_outer_lower, cholesky, cholesky_reference, cholesky_solve_right, mirror_lower, symmetrize,
+    LinalgError,
+};
 pub use real::Real;
-pub use trig::sin_cos_f32;
+pub use sqrt::sqrt_f32;
+pub use trig::{shift_sin_cos, sin_cos_f32};

@@ -18,6 +18,10 @@ pub trait Real: RealField + Copy + Default + core::fmt::Debug {
     fn sqrt_fast(self) -> Self;
     /// True when the value is neither NaN nor infinite.
     fn finite(self) -> bool;
+    /// Largest angle step `d` for which the series of
+    /// [`shift_sin_cos`](crate::math::shift_sin_cos) (truncation `d⁶/720`)
+    /// stays below this type's rounding error.
+    fn small_angle() -> Self;
 }
 
 impl Real for f64 {
@@ -41,6 +45,11 @@ impl Real for f64 {
     fn finite(self) -> bool {
         self.is_finite()
     }
+    #[inline]
+    fn small_angle() -> Self {
+        // 0.005⁶/720 = 2e-17, below 2⁻⁵³.
+        0.005
+    }
 }
 
 impl Real for f32 {
@@ -58,10 +67,15 @@ impl Real for f32 {
     }
     #[inline]
     fn sqrt_fast(self) -> Self {
-        libm::sqrtf(self)
+        super::sqrt_f32(self)
     }
     #[inline]
     fn finite(self) -> bool {
         self.is_finite()
+    }
+    #[inline]
+    fn small_angle() -> Self {
+        // 0.1⁶/720 = 1.4e-9, below half an ulp of 1 (6e-8).
+        0.1
     }
 }

@@ -3,7 +3,7 @@
 #![allow(clippy::indexing_slicing)]
 
 use super::{ImuVec, Mat6, StateVec, PITCH, ROLL, YAW};
-use crate::math::{wrap_pi, Real};
+use crate::math::{shift_sin_cos, wrap_pi, Real};
 
 /// Why the model refused to evaluate.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -49,14 +49,17 @@ impl<T: Real> Default for VehicleModel<T> {
     }
 }
 
-/// Trigonometric terms of one attitude, computed once per evaluation.
-#[derive(Clone, Copy)]
-struct Trig<T> {
+/// Sines and cosines of roll and pitch, evaluated once per attitude and
+/// shared by the Jacobians of one step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AttitudeTrig<T> {
     sphi: T,
     cphi: T,
     sth: T,
     cth: T,
 }
+
+type Trig<T> = AttitudeTrig<T>;
 
 impl<T: Real> VehicleModel<T> {
     fn trig(&self, x: &StateVec<T>) -> Result<Trig<T>, ModelError> {
@@ -74,6 +77,11 @@ impl<T: Real> VehicleModel<T> {
             sth,
             cth,
         })
+    }
+
+    /// The attitude trigonometry of `x`, for [`jacobians`](Self::jacobians).
+    pub fn attitude_trig(&self, x: &StateVec<T>) -> Result<AttitudeTrig<T>, ModelError> {
+        self.trig(x)
     }
 
     /// Checks that an attitude is away from the Euler singularity.
@@ -105,9 +113,26 @@ impl<T: Real> VehicleModel<T> {
     /// One step of length `dt` (explicit midpoint), with roll and yaw wrapped
     /// to (−π, π].
     pub fn step(&self, x: &StateVec<T>, u: &ImuVec<T>, dt: T) -> Result<StateVec<T>, ModelError> {
-        let k1 = self.derivative(x, u)?;
-        let mid = x + k1 * (dt * T::lit(0.5));
-        let k2 = self.derivative(&mid, u)?;
+        let t = self.trig(x)?;
+        let k1 = self.derivative_with(x, u, &t);
+        let h = dt * T::lit(0.5);
+        let mid = x + k1 * h;
+        // The midpoint attitude is a small step from x's: shift its sines and
+        // cosines (≈ 100 fewer instructions per step on the Cortex-M4F than
+        // evaluating them), unless the step is too large for the series.
+        let tm = match (
+            shift_sin_cos(t.sphi, t.cphi, k1[ROLL] * h),
+            shift_sin_cos(t.sth, t.cth, k1[PITCH] * h),
+        ) {
+            (Some((sphi, cphi)), Some((sth, cth))) if cth.abs() >= self.cos_pitch_min => Trig {
+                sphi,
+                cphi,
+                sth,
+                cth,
+            },
+            _ => self.trig(&mid)?,
+        };
+        let k2 = self.derivative_with(&mid, u, &tm);
         let mut next = x + k2 * dt;
         next[ROLL] = wrap_pi(next[ROLL]);
         next[YAW] = wrap_pi(next[YAW]);
@@ -121,6 +146,24 @@ impl<T: Real> VehicleModel<T> {
     /// State Jacobian `A = ∂f/∂x`.
     pub fn jacobian_state(&self, x: &StateVec<T>, u: &ImuVec<T>) -> Result<Mat6<T>, ModelError> {
         let t = self.trig(x)?;
+        Ok(self.jacobian_state_with(u, &t))
+    }
+
+    /// Both Jacobians `(A, B)` from one evaluation of the attitude
+    /// trigonometry.
+    pub fn jacobians(
+        &self,
+        x: &StateVec<T>,
+        u: &ImuVec<T>,
+        t: &AttitudeTrig<T>,
+    ) -> (Mat6<T>, Mat6<T>) {
+        (
+            self.jacobian_state_with(u, t),
+            self.jacobian_input_with(x, t),
+        )
+    }
+
+    fn jacobian_state_with(&self, u: &ImuVec<T>, t: &Trig<T>) -> Mat6<T> {
         let g = self.gravity;
         let (p, q, r) = (u[3], u[4], u[5]);
         let qs_rc = q * t.sphi + r * t.cphi;
@@ -137,13 +180,17 @@ impl<T: Real> VehicleModel<T> {
             z,   z,   z,   -qs_rc,                 z,                        z,
             z,   z,   z,   qc_rs / t.cth,          qs_rc * t.sth * sec2,     z,
         );
-        Ok(a)
+        a
     }
 
     /// Input Jacobian `B = G = ∂f/∂u_m`; with the additive fault convention
     /// (`measured = true + f`) the fault-input matrix is `G_f = −B`.
     pub fn jacobian_input(&self, x: &StateVec<T>) -> Result<Mat6<T>, ModelError> {
         let t = self.trig(x)?;
+        Ok(self.jacobian_input_with(x, &t))
+    }
+
+    fn jacobian_input_with(&self, x: &StateVec<T>, t: &Trig<T>) -> Mat6<T> {
         let (vu, vv, vw) = (x[0], x[1], x[2]);
         let tan = t.sth / t.cth;
         let o = T::one();
@@ -157,7 +204,7 @@ impl<T: Real> VehicleModel<T> {
             z, z, z, z,    t.cphi,          -t.sphi,
             z, z, z, z,    t.sphi / t.cth,  t.cphi / t.cth,
         );
-        Ok(b)
+        b
     }
 
     /// Discrete transition matrix of one step, `Φ ≈ I + A dt + (A dt)²/2`.

@@ -82,6 +82,12 @@ impl<T: Real> MeasurementModel<T> {
         }
     }
 
+    /// True when `h` is affine in the state (M1: `h(x) = x + c`), so the
+    /// filter may use the exact closed-form update.
+    pub fn is_affine(&self) -> bool {
+        matches!(self.kind, AidingKind::DvlCompass)
+    }
+
     /// `h(x)` given the body rate `omega` (for the lever-arm term).
     pub fn predict(&self, x: &StateVec<T>, omega: &Vector3<T>) -> MeasVec<T> {
         let v_sensor = Vector3::new(x[0], x[1], x[2]) + omega.cross(&self.lever_arm);

@@ -9,7 +9,7 @@ mod dynamics;
 mod measurement;
 mod noise;
 
-pub use dynamics::{ModelError, VehicleModel};
+pub use dynamics::{AttitudeTrig, ModelError, VehicleModel};
 pub use measurement::{AidingKind, Measurement, MeasurementModel, LEVER_ARM_NONE};
 pub use noise::{discrete_process_noise, discrete_process_noise_from, ImuNoisePsd};
 

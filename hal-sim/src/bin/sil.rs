@@ -188,9 +188,37 @@ fn profile() {
     );
     let _ = cost!("cholesky 6x6", cholesky(&p));
     let _ = cost!("nalgebra Cholesky 6x6", nalgebra::Cholesky::new(p));
+    let _ = cost!(
+        "cholesky_reference 6x6",
+        imu_fdi::math::cholesky_reference(&p)
+    );
     let mut q = p;
-    let _ = cost!("ger rank-1 6x6", q.ger(0.1, &x, &x, 1.0));
+    cost!("ger rank-1 6x6", {
+        q.ger(0.1, &x, &x, 1.0);
+        core::hint::black_box(&mut q);
+    });
+    cost!("syger rank-1 6x6", {
+        q.syger(0.1, &x, &x, 1.0);
+        core::hint::black_box(&mut q);
+    });
     let _ = cost!("outer d*d^T*w", p + x * x.transpose() * 0.1);
+    let mut q2 = p;
+    cost!("add_outer_lower", {
+        imu_fdi::math::add_outer_lower(&mut q2, &x, 0.1);
+        core::hint::black_box(&mut q2);
+    });
+    cost!("mirror_lower", {
+        imu_fdi::math::mirror_lower(&mut q2);
+        core::hint::black_box(&mut q2);
+    });
+    cost!(
+        "wrap_pi",
+        imu_fdi::math::wrap_pi(core::hint::black_box(0.3f32))
+    );
+    cost!(
+        "wrap_pi (4)",
+        imu_fdi::math::wrap_pi(core::hint::black_box(4.0f32))
+    );
     let mut ukf = Ukf::<f32, 6, 13>::new(x, p, &SigmaParams::default(), STATE_ANGLES)
         .unwrap_or_else(|| loop {});
     let _ = cost!(
@@ -201,4 +229,35 @@ fn profile() {
         "ukf.predict (identity)",
         ukf.predict(|s| Ok::<_, ()>(*s), &p)
     );
+    use imu_fdi::detect::{estimate_as_written, estimate_corrected, glr_isolate, InnovationWindow};
+    use imu_fdi::filter::Gate;
+    use imu_fdi::model::{AidingKind, MeasurementModel};
+    let meas = MeasurementModel::<f32>::new(AidingKind::DvlCompass);
+    let omega = nalgebra::Vector3::new(0.01f32, 0.02, 0.05);
+    let mut gate = Gate::<f32, 6>::new(8.0, 2);
+    let z = MeasVec::new(2.0, 0.1, -0.05, 0.05, 0.1, 1.0);
+    let r = MeasVec::from_element(1e-4f32);
+    let _ = cost!(
+        "ukf.update (M1)",
+        ukf.update(
+            &z,
+            &[true; 6],
+            |s| Ok::<_, ()>(meas.predict(s, &omega)),
+            &r,
+            &[false, false, false, true, true, true],
+            &mut gate
+        )
+    );
+    let w = MeasVec::from_element(1e4f32);
+    let _ = cost!("glr_isolate", glr_isolate(&a, &x, &w, 40.0, 0.02, 3));
+    let _ = cost!(
+        "estimate_corrected",
+        estimate_corrected(&a, &w, &x, &[true; 6])
+    );
+    let _ = cost!("estimate_as_written", estimate_as_written(&a, &b, 0.01, &x));
+    let mut win = InnovationWindow::<f32, 10>::new();
+    for k in 0..10 {
+        win.push(k as f32 * 0.1);
+    }
+    let _ = cost!("window stats (10)", win.stats());
 }
