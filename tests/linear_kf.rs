@@ -81,3 +81,81 @@ fn ukf_equals_kalman_filter_on_a_linear_system() {
         assert!(worst < 1e-9, "UKF differs from KF by {worst:e}");
     }
 }
+
+/// The closed-form update for an affine measurement (used for M1) equals the
+/// sigma-point update to rounding — with angle channels straddling ±π,
+/// channels missing, the gate rejecting a spike, and a delayed centre.
+#[test]
+fn affine_update_equals_the_sigma_point_update() {
+    use imu_fdi::model::{
+        AidingKind, MeasVec, MeasurementModel, StateVec, STATE_ANGLES,
+    };
+    let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+    let mut meas = MeasurementModel::<f64>::new(AidingKind::DvlCompass);
+    meas.lever_arm = nalgebra::Vector3::new(0.4, -0.1, 0.3);
+    let angles = [false, false, false, true, true, true];
+    let r = MeasVec::<f64>::new(1e-4, 1e-4, 4e-4, 1e-6, 1e-6, 4e-6);
+    let mut worst = 0.0f64;
+    for trial in 0..200 {
+        let x = StateVec::new(
+            rng.random_range(-3.0..3.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-0.3..0.3),
+            rng.random_range(-0.3..0.3),
+            if trial % 2 == 0 { 3.14 } else { rng.random_range(-3.1..3.1) },
+        );
+        let a = SMatrix::<f64, 6, 6>::from_fn(|_, _| rng.random_range(-0.02..0.02));
+        let p = a * a.transpose() + SMatrix::<f64, 6, 6>::from_diagonal_element(1e-5);
+        let omega = nalgebra::Vector3::new(0.1, -0.2, 0.05);
+        let delayed = if trial % 3 == 0 {
+            x + StateVec::new(0.01, 0.0, -0.01, 0.001, 0.0, 0.002)
+        } else {
+            x
+        };
+        let mut z = meas.predict(&x, &omega)
+            + MeasVec::from_fn(|i, _| rng.random_range(-1.0..1.0_f64) * r[i].sqrt() * 2.0);
+        z[5] = imu_fdi::math::wrap_pi(z[5]);
+        if trial % 5 == 0 {
+            z[1] += 1.0; // a spike the gate must reject in both forms
+        }
+        let available = [true, trial % 4 != 0, true, true, trial % 7 != 0, true];
+        let mut sigma = Ukf::<f64, 6, 13>::new(x, p, &SigmaParams::default(), STATE_ANGLES).unwrap();
+        let mut affine = sigma.clone();
+        let (mut g1, mut g2) = (Gate::<f64, 6>::new(8.0, 2), Gate::<f64, 6>::new(8.0, 2));
+        let o1 = sigma
+            .update_delayed(
+                &delayed,
+                &z,
+                &available,
+                |s| Ok::<_, ()>(meas.predict(s, &omega)),
+                &r,
+                &angles,
+                &mut g1,
+            )
+            .unwrap();
+        let h = meas.jacobian(&x, &omega);
+        let o2 = affine
+            .update_affine(
+                &meas.predict(&delayed, &omega),
+                &h,
+                &z,
+                &available,
+                &r,
+                &angles,
+                &mut g2,
+            )
+            .unwrap();
+        for (d1, d2) in o1.diag.iter().zip(o2.diag.iter()) {
+            assert_eq!(d1.fused, d2.fused);
+            assert_eq!(d1.available, d2.available);
+            worst = worst.max((d1.innovation - d2.innovation).abs() / d1.variance.sqrt());
+        }
+        let dx = sigma.state() - affine.state();
+        let dx = dx.map(imu_fdi::math::wrap_pi_f64);
+        worst = worst.max(dx.amax() / p.diagonal().amax().sqrt());
+        worst = worst.max((sigma.covariance() - affine.covariance()).amax() / p.amax());
+    }
+    println!("affine vs sigma-point update: largest relative difference {worst:e}");
+    assert!(worst < 1e-9, "largest relative difference {worst:e}");
+}
