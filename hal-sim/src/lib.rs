@@ -15,6 +15,7 @@ pub mod imu_model;
 pub mod scenario;
 pub mod setup;
 pub mod sim;
+pub mod target_checks;
 pub mod trajectory;
 
 #[cfg(feature = "std")]

@@ -125,18 +125,27 @@ impl DetectionTally {
                 .get(row.channel)
                 .copied()
                 .unwrap_or("?");
+            // Times as integer centiseconds: the same text on host and target,
+            // without pulling float formatting (≈ 20 KB) into the firmware.
+            let cs = |t: f64| libm::round(t * 100.0) as i64;
+            let (start, end) = (cs(row.start) / 100, cs(row.end) / 100);
             match first {
-                Some(t) => out(format_args!(
-                    "fault {} {:.0}-{:.0} s: detected at {:.2} s ({:.2} s after onset)",
-                    name,
-                    row.start,
-                    row.end,
-                    t,
-                    t - row.start
-                )),
+                Some(t) => {
+                    let (at, after) = (cs(*t), cs(*t - row.start));
+                    out(format_args!(
+                        "fault {} {}-{} s: detected at {}.{:02} s ({}.{:02} s after onset)",
+                        name,
+                        start,
+                        end,
+                        at / 100,
+                        at % 100,
+                        after / 100,
+                        after % 100
+                    ))
+                }
                 None => out(format_args!(
-                    "fault {} {:.0}-{:.0} s: NOT detected",
-                    name, row.start, row.end
+                    "fault {} {}-{} s: NOT detected",
+                    name, start, end
                 )),
             }
         }

@@ -127,7 +127,7 @@ impl Simulator {
                 FaultKind::Stuck => *v = last,
                 FaultKind::Dropout => present = false,
                 FaultKind::Clip(level) => *v = v.clamp(-level, level),
-                FaultKind::Spikes(amp) if (t - r.start) % 0.5 < 0.03 => *v += amp,
+                FaultKind::Spikes(amp) if spike_phase(t - r.start) < 0.03 => *v += amp,
                 FaultKind::NoiseIncrease(factor) => {
                     let extra = spec.noise_density
                         * libm::sqrt(rate)
@@ -217,4 +217,10 @@ impl Iterator for Simulator {
             imu_bias: self.imu.bias(),
         })
     }
+}
+
+/// `t mod 0.5 s` for t ≥ 0, without `f64 %` (a 3 KB software `fmod` on the
+/// Cortex-M4F's soft double precision).
+fn spike_phase(t: f64) -> f64 {
+    t - libm::floor(t * 2.0) * 0.5
 }
