@@ -22,7 +22,7 @@ pub fn estimate_as_written<T: Real>(
 }
 
 /// Solves `A x = b` by Gaussian elimination with partial pivoting, in place
-/// on copies (a fixed 6×6 kernel: 1/3 of the instructions of nalgebra's
+/// on copies (a fixed 6×6 kernel: about 70 % of the instructions of nalgebra's
 /// generic LU on the Cortex-M4F). `None` when a pivot is zero or the result
 /// is not finite.
 fn solve_pivoted<T: Real>(mut a: Mat6<T>, mut b: ImuVec<T>) -> Option<ImuVec<T>> {
@@ -75,23 +75,14 @@ pub fn estimate_corrected<T: Real>(
     rbar: &ImuVec<T>,
     columns: &[bool; 6],
 ) -> Option<ImuVec<T>> {
-    let mut normal = Mat6::<T>::zeros();
-    let mut rhs = nalgebra::SMatrix::<T, 1, 6>::zeros();
-    let mut observed = [false; 6];
-    for a in 0..6 {
-        for b in 0..6 {
-            let mut s = T::zero();
-            for i in 0..6 {
-                s += m[(i, a)] * w[i] * m[(i, b)];
-            }
-            normal[(a, b)] = s;
-        }
-        let mut s = T::zero();
-        for i in 0..6 {
-            s += m[(i, a)] * w[i] * rbar[i];
-        }
-        rhs[a] = s;
+    // Normal equations Mᵀ W M f = Mᵀ W r̄, with W M formed once.
+    let mut wm = *m;
+    for (mut row, wi) in wm.row_iter_mut().zip(w.iter()) {
+        row *= *wi;
     }
+    let mut normal = m.tr_mul(&wm);
+    let mut rhs = rbar.tr_mul(&wm);
+    let mut observed = [false; 6];
     // A column no monitored channel sees has a zero diagonal: decouple it.
     let mut max_diag = T::zero();
     for a in 0..6 {

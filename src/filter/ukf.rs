@@ -324,7 +324,10 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
             pzz += dz * dz.transpose() * *w;
             pxz += dx * dz.transpose() * *w;
         }
+        // Not generic over the model's error type, so one copy of the
+        // correction serves both update forms.
         self.correct(z, &z_hat, pzz, pxz, available, meas_angles, gate, failure)
+            .map_err(UkfError::widen)
     }
 
     /// Update with a measurement that is affine in the state,
@@ -349,8 +352,20 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         meas_angles: &[bool; M],
         gate: &mut Gate<T, M>,
     ) -> Result<UpdateOutput<T, N, M>, UkfError<core::convert::Infallible>> {
-        let pxz = self.p * h.transpose();
-        let mut pzz = h * pxz;
+        // H = I (M1) needs no products: P_xz = P, P_zz = P + R.
+        let (pxz, mut pzz) = if M == N && h.is_identity(T::zero()) {
+            let pxz = SMatrix::<T, N, M>::from_fn(|i, j| {
+                self.p.get((i, j)).copied().unwrap_or_else(T::zero)
+            });
+            let pzz = SMatrix::<T, M, M>::from_fn(|i, j| {
+                self.p.get((i, j)).copied().unwrap_or_else(T::zero)
+            });
+            (pxz, pzz)
+        } else {
+            let pxz = self.p * h.transpose();
+            let pzz = h * pxz;
+            (pxz, pzz)
+        };
         for (i, ri) in r.iter().enumerate() {
             if let Some(d) = pzz.get_mut((i, i)) {
                 *d += *ri;
@@ -362,7 +377,7 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
 
     /// The Kalman correction shared by both update forms.
     #[allow(clippy::too_many_arguments)]
-    fn correct<const M: usize, E>(
+    fn correct<const M: usize>(
         &mut self,
         z: &SVector<T, M>,
         z_hat: &SVector<T, M>,
@@ -372,7 +387,7 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         meas_angles: &[bool; M],
         gate: &mut Gate<T, M>,
         failure: Option<LinalgError>,
-    ) -> Result<UpdateOutput<T, N, M>, UkfError<E>> {
+    ) -> Result<UpdateOutput<T, N, M>, UkfError<core::convert::Infallible>> {
         let nu_all = diff(z, z_hat, meas_angles);
         let mut diag = [ChannelDiag::<T>::default(); M];
         let mut nu = SVector::<T, M>::zeros();
@@ -415,7 +430,9 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
                 *v = wrap_pi(*v);
             }
         }
-        let p = self.p - gain * pzz * gain.transpose();
+        // K P_zz Kᵀ = K P_xzᵀ (K = P_xz P_zz⁻¹; the columns of channels not
+        // fused are zero in both): one product instead of two.
+        let p = self.p - gain * pxz.transpose();
         if !(x.iter().all(|v| v.finite()) && p.iter().all(|v| v.finite())) {
             return Err(UkfError::NonFinite);
         }

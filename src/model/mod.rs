@@ -11,7 +11,10 @@ mod noise;
 
 pub use dynamics::{AttitudeTrig, ModelError, VehicleModel};
 pub use measurement::{AidingKind, Measurement, MeasurementModel, LEVER_ARM_NONE};
-pub use noise::{discrete_process_noise, discrete_process_noise_from, ImuNoisePsd};
+pub use noise::{
+    discrete_process_noise, discrete_process_noise_from, discrete_process_noise_structured,
+    ImuNoisePsd,
+};
 
 use nalgebra::{SMatrix, SVector};
 

@@ -9,8 +9,8 @@ use crate::detect::{
 use crate::filter::{ChannelDiag, Gate, Ukf, UkfError};
 use crate::math::{wrap_pi, Real};
 use crate::model::{
-    discrete_process_noise_from, ImuVec, Mat6, Measurement, MeasurementModel, ModelError, StateVec,
-    VehicleModel, NX, NZ, ROLL, STATE_ANGLES, YAW,
+    discrete_process_noise_structured, ImuVec, Mat6, Measurement, MeasurementModel, ModelError,
+    StateVec, VehicleModel, NX, NZ, ROLL, STATE_ANGLES, YAW,
 };
 use crate::stats::normal_upper_quantile;
 
@@ -292,7 +292,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let x = *self.ukf.state();
         let trig = self.model.attitude_trig(&x)?;
         let (a, b) = self.model.jacobians(&x, u, &trig);
-        let q = discrete_process_noise_from(&a, &b, &self.cfg.process_noise, dt);
+        let q = discrete_process_noise_structured(&a, &b, &self.cfg.process_noise, dt);
         let model = self.model;
         let reset = match self.ukf.predict(|s| model.step(s, u, dt), &q) {
             Ok(()) => false,
