@@ -88,13 +88,18 @@ impl DetectionTally {
 
     /// Records one step.
     pub fn record<T: Real>(&mut self, s: &SimSample, r: &Report<T>) {
+        self.record_status(s, &r.status);
+    }
+
+    /// Records one step from per-channel states (e.g. a task report).
+    pub fn record_status(&mut self, s: &SimSample, status: &[imu_fdi::monitor::ChannelState; 6]) {
         for (row, first) in self.rows.iter_mut() {
             if first.is_some() || !row.active(s.t) {
                 continue;
             }
             let f = s.fault.get(row.channel).copied().unwrap_or(0.0);
             let want = if f > 0.0 { 1 } else { -1 };
-            if f != 0.0 && r.status.get(row.channel).and_then(|c| c.sign()) == Some(want) {
+            if f != 0.0 && status.get(row.channel).and_then(|c| c.sign()) == Some(want) {
                 *first = Some(s.t);
             }
         }
@@ -150,4 +155,62 @@ impl DetectionTally {
             }
         }
     }
+}
+
+/// The ICM-42688-P configuration the chip-in-the-loop runs use: the
+/// narrowest ranges that hold the AUV scenarios with their faults.
+pub fn chip_config() -> imu_fdi::imu::icm42688::Config {
+    use imu_fdi::imu::icm42688::{AccelRange, Config, GyroRange, Odr};
+    Config {
+        gyro_range: GyroRange::Dps250,
+        accel_range: AccelRange::G4,
+        odr: Odr::Hz100,
+        ui_filter_bw: 1,
+    }
+}
+
+/// Scenario `scn` (seed `seed`) through the real ICM-42688-P driver reading
+/// hal-sim's register-level emulated chip, into the periodic
+/// [`Monitor`](imu_fdi::monitor::Monitor) task — the firmware's data path,
+/// shared by the host CLI (`detections --via-chip`) and the QEMU image so
+/// both run the same code. `timed` is handed each `task.step` call to run
+/// (the QEMU image counts its instructions). Returns the tally, or `None` if the
+/// driver or the monitor refused to start.
+pub fn run_via_chip(
+    scn: &Scenario,
+    seed: u64,
+    mut timed: impl FnMut(&mut dyn FnMut()),
+) -> Option<DetectionTally> {
+    use core::cell::RefCell;
+    use imu_fdi::imu::icm42688::Icm42688;
+    use imu_fdi::model::{MeasVec, Measurement};
+    use imu_fdi::monitor::Monitor;
+
+    use crate::emulated_icm42688::{EmulatedIcm42688, SharedBus};
+
+    struct NoDelay;
+    impl embedded_hal::delay::DelayNs for NoDelay {
+        fn delay_ns(&mut self, _ns: u32) {}
+    }
+
+    let chip = RefCell::new(EmulatedIcm42688::new());
+    let imu = Icm42688::new(SharedBus(&chip), chip_config(), &mut NoDelay).ok()?;
+    let mut task = Monitor::<_>::new(imu, monitor_config(scn, &RunOptions::default())).ok()?;
+    let mut tally = DetectionTally::new(scn);
+    for s in crate::sim::Simulator::new(scn, seed) {
+        if let Some(v) = s.imu {
+            chip.borrow_mut()
+                .set_sample([v[0], v[1], v[2]], [v[3], v[4], v[5]], 25.0);
+        }
+        let m = Measurement {
+            z: MeasVec::from_fn(|i, _| s.aiding.get(i).map_or(f32::NAN, |v| *v as f32)),
+            available: s.aiding_available,
+        };
+        let mut report = None;
+        timed(&mut || report = Some(task.step(s.dt as f32, &m)));
+        if let Some(r) = report {
+            tally.record_status(&s, &r.status);
+        }
+    }
+    Some(tally)
 }

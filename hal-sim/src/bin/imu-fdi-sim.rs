@@ -142,6 +142,10 @@ enum Cmd {
         /// Seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Feed the monitor as the firmware does: the ICM-42688-P driver
+        /// reading the emulated chip, into the periodic Monitor task.
+        #[arg(long)]
+        via_chip: bool,
     },
     /// Write a simulated run in the SPEC §10 replay format (with truth columns).
     Simulate {
@@ -362,7 +366,21 @@ fn main() -> Result<()> {
             }
             out!("detection rate counted where |fault| ≥ the scenario's minimum (0.1 m/s², 0.5 °/s) from L after it is reached");
         }
-        Cmd::Detections { name, seed } => {
+        Cmd::Detections {
+            name,
+            seed,
+            via_chip: true,
+        } => {
+            let scn = scenario(&name)?;
+            let tally = hal_sim::setup::run_via_chip(&scn, seed, |step| step())
+                .ok_or_else(|| anyhow!("the driver or the monitor refused to start"))?;
+            tally.print(|line| out!("{line}"));
+        }
+        Cmd::Detections {
+            name,
+            seed,
+            via_chip: false,
+        } => {
             let scn = scenario(&name)?;
             let opts = options(
                 &name,

@@ -10,7 +10,7 @@
 //! at the end. Output goes over semihosting; the exit status is non-zero if
 //! the run did not detect S2's faults as on the host.
 //!
-//! Build and run: `scripts/qemu-bench.sh` (see the README).
+//! Build and run: `scripts/qemu-sil.sh` (see the README).
 #![no_std]
 #![no_main]
 #![allow(clippy::empty_loop)] // reached only after the semihosting exit has stopped QEMU
@@ -18,10 +18,7 @@
 
 use cortex_m_rt::{entry, exception, ExceptionFrame};
 use cortex_m_semihosting::{debug, hprintln};
-use hal_sim::setup::{monitor_config, DetectionTally, RunOptions};
-use hal_sim::{Scenario, Simulator};
-use imu_fdi::model::{ImuVec, MeasVec, Measurement};
-use imu_fdi::monitor::UkfMonitor;
+use hal_sim::Scenario;
 
 /// TIM2 counter (CNT) of the STM32F4: TIM2 base 0x4000_0000 + 0x24.
 const TIM2_CNT: *const u32 = 0x4000_0024 as *const u32;
@@ -73,20 +70,39 @@ impl Cost {
     }
 }
 
+fn overhead() -> u32 {
+    let a = instructions();
+    let b = instructions();
+    b.wrapping_sub(a)
+}
+
+fn finish(ok: bool) -> ! {
+    if ok {
+        hprintln!("OK: every S2 fault detected on its channel with the right sign");
+        debug::exit(debug::EXIT_SUCCESS);
+    } else {
+        hprintln!("FAIL: S2 not detected as on the host");
+        debug::exit(debug::EXIT_FAILURE);
+    }
+    loop {}
+}
+
+/// S2 straight into the `f32` monitor: the instruction budget figures.
+#[cfg(not(feature = "sil-chip"))]
 #[entry]
 fn main() -> ! {
+    use hal_sim::setup::{monitor_config, DetectionTally, RunOptions};
+    use hal_sim::Simulator;
+    use imu_fdi::model::{ImuVec, MeasVec, Measurement};
+    use imu_fdi::monitor::UkfMonitor;
+
     let scn = Scenario::s2();
     let cfg = monitor_config::<f32>(&scn, &RunOptions::default());
     let Ok(mut monitor) = UkfMonitor::<f32>::new(cfg) else {
         hprintln!("invalid monitor configuration");
-        debug::exit(debug::EXIT_FAILURE);
-        loop {}
+        finish(false)
     };
-    let overhead = {
-        let a = instructions();
-        let b = instructions();
-        b.wrapping_sub(a)
-    };
+    let overhead = overhead();
     let (mut all, mut predict_only, mut with_update) =
         (Cost::default(), Cost::default(), Cost::default());
     let mut tally = DetectionTally::new(&scn);
@@ -127,14 +143,41 @@ fn main() -> ! {
     );
     hprintln!("peak stack: {} bytes", stack_high_water());
     tally.print(|line| hprintln!("{}", line));
-    if tally.all_detected() {
-        hprintln!("OK: every S2 fault detected on its channel with the right sign");
-        debug::exit(debug::EXIT_SUCCESS);
-    } else {
-        hprintln!("FAIL: S2 detections differ from the host");
-        debug::exit(debug::EXIT_FAILURE);
+    finish(tally.all_detected())
+}
+
+/// S2 along the firmware's data path: the ICM-42688-P driver reading
+/// hal-sim's emulated chip over `SpiDevice`, into the periodic `Monitor`
+/// task (`hal_sim::setup::run_via_chip`, the code the host CLI runs for
+/// `detections --via-chip`).
+#[cfg(feature = "sil-chip")]
+#[entry]
+fn main() -> ! {
+    let scn = Scenario::s2();
+    let overhead = overhead();
+    let mut cost = Cost::default();
+    let tally = hal_sim::setup::run_via_chip(&scn, 1, |step| {
+        let t0 = instructions();
+        step();
+        cost.add(instructions().wrapping_sub(t0).saturating_sub(overhead));
+    });
+    hprintln!("S2 seed 1 through the ICM-42688-P driver, the emulated chip and the Monitor task");
+    hprintln!(
+        "instructions per task step (driver read of the emulated chip + monitor): mean {} max {}",
+        cost.mean(),
+        cost.max
+    );
+    hprintln!("peak stack: {} bytes", stack_high_water());
+    match tally {
+        Some(t) => {
+            t.print(|line| hprintln!("{}", line));
+            finish(t.all_detected())
+        }
+        None => {
+            hprintln!("the driver or the monitor refused to start");
+            finish(false)
+        }
     }
-    loop {}
 }
 
 #[exception]
