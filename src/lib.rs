@@ -28,6 +28,10 @@
 //! dynamics, measurement models, process noise), [`filter`] (UKF),
 //! [`detect`] (windows, t-test, decoupling, GLR, estimators), [`stats`]
 //! (Student-t quantile), [`monitor`] (the composed periodic monitor).
+//!
+//! Safety: `unsafe_code` is denied crate-wide; the one exception is the
+//! two-instruction naked function behind [`math::sqrt_f32`] that issues the
+//! Cortex-M4F's `vsqrt` (only compiled for hard-float ARM targets).
 #![cfg_attr(not(test), no_std)]
 
 pub mod detect;

@@ -221,6 +221,7 @@ fn profile() {
     hprintln!("profile (instructions, one call):");
     cost!("sin_cos_f32", sin_cos_f32(core::hint::black_box(0.3)));
     cost!("libm::sqrtf", libm::sqrtf(core::hint::black_box(0.3)));
+    cost!("sqrt_f32 (vsqrt)", sqrt_f32(core::hint::black_box(0.3)));
     let _ = cost!("model.derivative", m.derivative(&x, &u));
     let _ = cost!("model.step (RK2)", m.step(&x, &u, 0.01));
     let a = cost!(
