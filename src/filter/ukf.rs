@@ -45,6 +45,9 @@ pub struct UpdateOutput<T, const N: usize, const M: usize> {
     pub diag: [ChannelDiag<T>; M],
     /// The gain that was applied (zero columns for channels not fused).
     pub gain: SMatrix<T, N, M>,
+    /// The innovation covariance `P_zz` used for the gain (channels not
+    /// fused decoupled: unit variance, no cross terms).
+    pub innovation_covariance: SMatrix<T, M, M>,
     /// Set when `P` had to be re-initialised before this update (the update
     /// was then done with the reset covariance).
     pub covariance_reset: Option<LinalgError>,
@@ -442,6 +445,7 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         Ok(UpdateOutput {
             diag,
             gain,
+            innovation_covariance: pzz,
             covariance_reset: failure,
         })
     }

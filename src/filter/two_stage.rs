@@ -1,0 +1,235 @@
+//! Optimal two-stage UKF (\[OTS\], SPEC §6): joint estimation of the state
+//! and of additive input (IMU) faults modelled as random walks.
+
+use nalgebra::{SMatrix, SVector};
+
+use super::{Gate, SigmaParams, Ukf, UkfError, UpdateOutput};
+use crate::math::{cholesky, cholesky_solve_right, symmetrize, wrap_pi, Real};
+
+/// A bias-free UKF (state `x̄`, covariance `P̄`) and a linear fault filter
+/// (`f̂`, `P^f`) coupled by `U`, `V`, `S` (Hsieh & Chen 1999), with `N`
+/// states, `S = 2N + 1` sigma points and `L` fault channels.
+///
+/// The model is `x_{k+1} = f(x_k, u_k − f_k) + ω`, `f_{k+1} = f_k + w^f`,
+/// `y = h(x) + ν`. Each step the caller passes the propagation through the
+/// *corrected* input (`u_m − f̂`) and the Jacobians `Φ = ∂x_{k+1}/∂x` and
+/// `F = ∂x_{k+1}/∂f` at the full estimate. Following SPEC §6 the full
+/// estimate `x̂ = x̄ + V f̂` is propagated and shifted back
+/// (`x̄_{k+1|k} = UT_f(x̂, P̄) − U f̂`), so the model is never evaluated at the
+/// non-physical `x̄`; for a linear model this is exactly the two-stage
+/// filter, which equals the augmented-state Kalman filter (tested to 1e-13).
+///
+/// With `Q^{xf} = 0` the compensated process noise is
+/// `Q̄ = Q^x + Ū P^f (P^f_{k+1|k})⁻¹ Q^f Ūᵀ`, positive semi-definite by
+/// construction (SPEC §6), and `U = Ū P^f (P^f_{k+1|k})⁻¹`.
+#[derive(Debug, Clone)]
+pub struct TwoStageUkf<T, const N: usize, const S: usize, const L: usize> {
+    bias_free: Ukf<T, N, S>,
+    fault: SVector<T, L>,
+    pf: SMatrix<T, L, L>,
+    pf_reset: SMatrix<T, L, L>,
+    qf: SMatrix<T, L, L>,
+    u: SMatrix<T, N, L>,
+    v: SMatrix<T, N, L>,
+    angles: [bool; N],
+}
+
+/// What a two-stage update produced.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TwoStageUpdate<T, const N: usize, const M: usize, const L: usize> {
+    /// The bias-free filter's update (innovations `r̄`, gain `K^x`, …).
+    pub bias_free: UpdateOutput<T, N, M>,
+    /// The fault filter's innovation `r^f = r̄ − S f̂` (0 for channels not
+    /// fused).
+    pub fault_innovation: SVector<T, M>,
+    /// The fault filter's gain `K^f`.
+    pub fault_gain: SMatrix<T, L, M>,
+}
+
+fn wrap_angles<T: Real, const K: usize>(v: &mut SVector<T, K>, angles: &[bool; K]) {
+    for (x, a) in v.iter_mut().zip(angles.iter()) {
+        if *a {
+            *x = wrap_pi(*x);
+        }
+    }
+}
+
+impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, S, L> {
+    /// The filter at state `x0` (covariance `px0`) and fault `f0`
+    /// (covariance `pf0`), uncorrelated (\[OTS\] eq. (27): `P^{xf}₀ = 0`, so
+    /// `V₀ = 0`, `x̄₀ = x₀`, `P̄₀ = P^x₀`), with fault random-walk covariance
+    /// `qf` per step. `None` for unusable sigma parameters.
+    pub fn new(
+        x0: SVector<T, N>,
+        px0: SMatrix<T, N, N>,
+        f0: SVector<T, L>,
+        pf0: SMatrix<T, L, L>,
+        qf: SMatrix<T, L, L>,
+        params: &SigmaParams,
+        angles: [bool; N],
+    ) -> Option<Self> {
+        Some(Self {
+            bias_free: Ukf::new(x0, px0, params, angles)?,
+            fault: f0,
+            pf: pf0,
+            pf_reset: pf0,
+            qf,
+            u: SMatrix::zeros(),
+            v: SMatrix::zeros(),
+            angles,
+        })
+    }
+
+    /// The full state estimate `x̂ = x̄ + V f̂`.
+    pub fn state(&self) -> SVector<T, N> {
+        let mut x = self.bias_free.state() + self.v * self.fault;
+        wrap_angles(&mut x, &self.angles);
+        x
+    }
+    /// Its covariance `P^x = P̄ + V P^f Vᵀ`.
+    pub fn state_covariance(&self) -> SMatrix<T, N, N> {
+        self.bias_free.covariance() + self.v * self.pf * self.v.transpose()
+    }
+    /// The fault estimate `f̂`.
+    pub fn fault(&self) -> &SVector<T, L> {
+        &self.fault
+    }
+    /// Its covariance `P^f`.
+    pub fn fault_covariance(&self) -> &SMatrix<T, L, L> {
+        &self.pf
+    }
+    /// The bias-free filter.
+    pub fn bias_free(&self) -> &Ukf<T, N, S> {
+        &self.bias_free
+    }
+    /// Sets the fault random-walk covariance per step (e.g. raised while a
+    /// fault is being tracked).
+    pub fn set_fault_noise(&mut self, qf: SMatrix<T, L, L>) {
+        self.qf = qf;
+    }
+    /// Sets the per-state variance floor of the bias-free filter.
+    pub fn set_min_variance(&mut self, v: SVector<T, N>) {
+        self.bias_free.set_min_variance(v);
+    }
+    /// Overwrites the state (fault estimate and coupling kept at zero
+    /// correlation: `V = 0`), e.g. at alignment.
+    pub fn reset_state(&mut self, x: SVector<T, N>, px: SMatrix<T, N, N>) {
+        self.v = SMatrix::zeros();
+        self.u = SMatrix::zeros();
+        self.bias_free.reset(x, px);
+    }
+
+    /// Time update. `step` propagates a state through the model with the
+    /// corrected input `u_m − f̂`; `phi` and `fmat` are `∂x_{k+1}/∂x` and
+    /// `∂x_{k+1}/∂f` at the full estimate; `qx` the state process noise.
+    pub fn predict<E>(
+        &mut self,
+        step: impl FnMut(&SVector<T, N>) -> Result<SVector<T, N>, E>,
+        phi: &SMatrix<T, N, N>,
+        fmat: &SMatrix<T, N, L>,
+        qx: &SMatrix<T, N, N>,
+    ) -> Result<(), UkfError<E>> {
+        let x_full = self.state();
+        let ubar = phi * self.v + fmat;
+        let mut pf_pred = self.pf + self.qf;
+        symmetrize(&mut pf_pred);
+        // W = P^f (P^f_{k+1|k})⁻¹; U = Ū W; Q̄ = Q^x + Ū W Q^f Ūᵀ.
+        let w = match cholesky(&pf_pred) {
+            Ok(l) => cholesky_solve_right(&l, &self.pf),
+            Err(_) => {
+                // Lost fault covariance: restart the fault filter from its
+                // initial covariance (the state filter carries on).
+                self.pf = self.pf_reset;
+                pf_pred = self.pf + self.qf;
+                match cholesky(&pf_pred) {
+                    Ok(l) => cholesky_solve_right(&l, &self.pf),
+                    Err(e) => return Err(UkfError::CovarianceReset(e)),
+                }
+            }
+        };
+        let u = ubar * w;
+        let mut qbar = qx + ubar * (w * self.qf) * ubar.transpose();
+        symmetrize(&mut qbar);
+        let pbar = *self.bias_free.covariance();
+        let x_bar_prev = *self.bias_free.state();
+        // Sigma points spread by P̄ around the full estimate.
+        self.bias_free.reset(x_full, pbar);
+        if let Err(e) = self.bias_free.predict(step, &qbar) {
+            if !matches!(e, UkfError::CovarianceReset(_)) {
+                self.bias_free.reset(x_bar_prev, pbar);
+                return Err(e);
+            }
+        }
+        let mut x_bar = self.bias_free.state() - u * self.fault;
+        wrap_angles(&mut x_bar, &self.angles);
+        let p_pred = *self.bias_free.covariance();
+        self.bias_free.reset(x_bar, p_pred);
+        self.u = u;
+        // Until a measurement arrives the full estimate is x̄ + U f̂
+        // (V = U − K^x S with K^x = 0).
+        self.v = u;
+        self.pf = pf_pred;
+        Ok(())
+    }
+
+    /// Measurement update. `h` maps a (full) state to the `M` channels, `hjac`
+    /// is `∂h/∂x` at the predicted full estimate, `r` the diagonal
+    /// measurement noise; `available`, `meas_angles` and `gate` as in
+    /// [`Ukf::update`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn update<const M: usize, E>(
+        &mut self,
+        z: &SVector<T, M>,
+        available: &[bool; M],
+        h: impl FnMut(&SVector<T, N>) -> Result<SVector<T, M>, E>,
+        hjac: &SMatrix<T, M, N>,
+        r: &SVector<T, M>,
+        meas_angles: &[bool; M],
+        gate: &mut Gate<T, M>,
+    ) -> Result<TwoStageUpdate<T, N, M, L>, UkfError<E>> {
+        // Predicted full estimate; the bias-free innovation is
+        // r̄ = y − h(x̄) ≈ (y + S f̂) − h(x̄ + U f̂).
+        let mut x_full = self.bias_free.state() + self.u * self.fault;
+        wrap_angles(&mut x_full, &self.angles);
+        let mut s = hjac * self.u;
+        let mut z_mod = z + s * self.fault;
+        wrap_angles(&mut z_mod, meas_angles);
+        let out =
+            self.bias_free
+                .update_delayed(&x_full, &z_mod, available, h, r, meas_angles, gate)?;
+        let mut rbar = SVector::<T, M>::zeros();
+        for (i, d) in out.diag.iter().enumerate() {
+            if d.fused {
+                if let Some(v) = rbar.get_mut(i) {
+                    *v = d.innovation;
+                }
+            } else {
+                s.set_row(i, &nalgebra::SMatrix::<T, 1, L>::zeros());
+            }
+        }
+        let mut rf = rbar - s * self.fault;
+        wrap_angles(&mut rf, meas_angles);
+        let pyy = out.innovation_covariance;
+        let pf_st = self.pf * s.transpose();
+        let mut a = pyy + s * pf_st;
+        symmetrize(&mut a);
+        let la = cholesky(&a).map_err(UkfError::InnovationCovariance)?;
+        let kf = cholesky_solve_right(&la, &pf_st);
+        let fault = self.fault + kf * rf;
+        // Joseph form: (I − K S) P (I − K S)ᵀ + K P_yy Kᵀ.
+        let ikf = SMatrix::<T, L, L>::identity() - kf * s;
+        let mut pf = ikf * self.pf * ikf.transpose() + kf * pyy * kf.transpose();
+        symmetrize(&mut pf);
+        if !(fault.iter().all(|v| v.finite()) && pf.iter().all(|v| v.finite())) {
+            return Err(UkfError::NonFinite);
+        }
+        self.fault = fault;
+        self.pf = pf;
+        self.v = self.u - out.gain * s;
+        Ok(TwoStageUpdate {
+            bias_free: out,
+            fault_innovation: rf,
+            fault_gain: kf,
+        })
+    }
+}
