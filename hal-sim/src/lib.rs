@@ -21,6 +21,8 @@ pub mod trajectory;
 #[cfg(feature = "std")]
 pub mod metrics;
 #[cfg(feature = "std")]
+pub mod ots;
+#[cfg(feature = "std")]
 pub mod replay;
 #[cfg(feature = "std")]
 pub mod runner;

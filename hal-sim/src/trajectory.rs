@@ -32,6 +32,11 @@ pub enum Profile {
     /// Fixed-wing aircraft at ~20 m/s: banked turns of ±25°, pitch 0–10°,
     /// heading sweeps of ±90° (up to ~7°/s).
     Aircraft,
+    /// The aircraft in gusty wind (S3): on top of the manoeuvres, gusts of
+    /// ±1.5 m/s along and ±1 m/s across the flight path (periods 2–6 s) and
+    /// the attitude they cause (±3° roll, ±2° pitch at 1.5–3 s) — the
+    /// turbulence a GNSS-aided small aircraft sees.
+    AircraftWind,
 }
 
 /// `c + Σ A_k sin(ω_k t + ϕ_k)` with its derivative.
@@ -109,6 +114,18 @@ impl Trajectory {
                     signal(rng, psi0, &[(30.0 * DEG, 50.0), (10.0 * DEG, 21.0)]),
                 ],
             ),
+            Profile::AircraftWind => (
+                [
+                    signal(rng, 20.0, &[(2.0, 30.0), (0.5, 11.0), (1.5, 4.0)]),
+                    signal(rng, 0.0, &[(0.5, 17.0), (1.0, 2.7)]),
+                    signal(rng, 0.0, &[(1.0, 23.0), (0.7, 3.3)]),
+                ],
+                [
+                    signal(rng, 0.0, &[(25.0 * DEG, 40.0), (3.0 * DEG, 1.7)]),
+                    signal(rng, 5.0 * DEG, &[(5.0 * DEG, 25.0), (2.0 * DEG, 2.9)]),
+                    signal(rng, psi0, &[(90.0 * DEG, 80.0), (10.0 * DEG, 19.0)]),
+                ],
+            ),
             Profile::Aircraft => (
                 [
                     signal(rng, 20.0, &[(2.0, 30.0), (0.5, 11.0)]),
@@ -169,7 +186,7 @@ mod tests {
 
     #[test]
     fn imu_truth_is_consistent_with_the_filter_model() {
-        for profile in [Profile::Auv, Profile::Aircraft] {
+        for profile in [Profile::Auv, Profile::Aircraft, Profile::AircraftWind] {
             let mut rng = Xoshiro256PlusPlus::seed_from_u64(3);
             let traj = Trajectory::new(profile, &mut rng);
             let model = VehicleModel::<f64>::default();

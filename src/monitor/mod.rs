@@ -2,11 +2,13 @@
 //! learning, drift tracking, detection and estimation in one periodic `step`.
 
 mod config;
+mod otsukf_monitor;
 mod report;
 mod task;
 mod ukf_monitor;
 
 pub use config::{ConfigError, UkfMonitorConfig};
+pub use otsukf_monitor::{OtsReport, OtsukfConfig, OtsukfMonitor};
 pub use report::{ChannelState, Health, Phase, Report};
 pub use task::{Monitor, TaskReport};
 pub use ukf_monitor::{UkfMonitor, DEFAULT_WINDOW, MAX_DELAY_STEPS};

@@ -1,0 +1,372 @@
+//! The optimal two-stage UKF as a monitor: joint state and IMU-fault
+//! estimation, the corrected IMU sample, and a per-channel decision from the
+//! fault estimate and its variance.
+
+use nalgebra::Vector3;
+
+use super::{ChannelState, ConfigError, Health, Phase, UkfMonitorConfig};
+use crate::filter::{Gate, TwoStageUkf, UkfError};
+use crate::math::Real;
+use crate::model::{
+    discrete_process_noise_structured, ImuVec, Mat6, Measurement, MeasurementModel, ModelError,
+    StateVec, VehicleModel, NZ, ROLL, STATE_ANGLES, YAW,
+};
+
+const MEAS_ANGLES: [bool; NZ] = [false, false, false, true, true, true];
+
+/// Configuration of [`OtsukfMonitor`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OtsukfConfig<T> {
+    /// Vehicle, sensors, aiding, start-up timing and minimum faults (the
+    /// detector fields of the innovation monitor are not used).
+    pub base: UkfMonitorConfig<T>,
+    /// Random-walk power spectral density of the fault model per channel,
+    /// ((m/s²)²/s, (rad/s)²/s): `Q^f = psd · dt` per step. It sets how fast a
+    /// fault estimate follows a change (and how noisy it is when quiet).
+    pub fault_psd: ImuVec<T>,
+    /// Initial fault standard deviation per channel (`P^f₀`).
+    pub fault_sigma0: ImuVec<T>,
+    /// A channel is declared faulty when `|f̂ − b| ≥ k_on·σ_f` and
+    /// `|f̂ − b| ≥ min_fault` (`b` the nominal bias learned at start-up)…
+    pub k_on: T,
+    /// …and cleared when `|f̂ − b| < k_off·σ_f` or `|f̂ − b| < min_fault/2`.
+    pub k_off: T,
+}
+
+impl<T: Real> OtsukfConfig<T> {
+    /// Defaults around an innovation-monitor configuration: fault random walk
+    /// of 0.05 (m/s²)²/s and (0.5 °/s)²/s — a step is followed within about a
+    /// second at 10 Hz aiding — initial fault σ of 1 m/s² and 1 °/s, and a
+    /// 5σ / 2σ hysteresis.
+    pub fn from_base(base: UkfMonitorConfig<T>) -> Self {
+        let deg = core::f64::consts::PI / 180.0;
+        let ga = T::lit(0.05);
+        let gg = T::lit((0.5 * deg) * (0.5 * deg));
+        Self {
+            base,
+            fault_psd: ImuVec::new(ga, ga, ga, gg, gg, gg),
+            fault_sigma0: ImuVec::new(
+                T::one(),
+                T::one(),
+                T::one(),
+                T::lit(deg),
+                T::lit(deg),
+                T::lit(deg),
+            ),
+            k_on: T::lit(5.0),
+            k_off: T::lit(2.0),
+        }
+    }
+
+    /// Checks the configuration.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        self.base.validate()?;
+        let ok = self
+            .fault_psd
+            .iter()
+            .chain(self.fault_sigma0.iter())
+            .all(|v| v.finite() && *v > T::zero())
+            && self.k_on.finite()
+            && self.k_off.finite()
+            && self.k_off > T::zero()
+            && self.k_off <= self.k_on;
+        if ok {
+            Ok(())
+        } else {
+            Err(ConfigError::NonPositive)
+        }
+    }
+}
+
+/// What [`OtsukfMonitor::step`] reports every period.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OtsReport<T> {
+    /// Life-cycle phase.
+    pub phase: Phase,
+    /// Per IMU channel decision.
+    pub status: [ChannelState; 6],
+    /// Fault estimate `f̂ − b` (the nominal bias `b` learned at start-up
+    /// removed), raw units (m/s², rad/s).
+    pub fault_estimate: ImuVec<T>,
+    /// Standard deviation of the fault estimate.
+    pub fault_sigma: ImuVec<T>,
+    /// Everything the filter attributes to the IMU: `f̂` (nominal bias plus
+    /// fault).
+    pub total_bias: ImuVec<T>,
+    /// The corrected IMU sample `u_m − f̂` a flight controller can use
+    /// instead of the raw one.
+    pub corrected_imu: ImuVec<T>,
+    /// State estimate `[u, v, w, φ, θ, ψ]`.
+    pub state: StateVec<T>,
+    /// Its standard deviation.
+    pub state_sigma: StateVec<T>,
+    /// Input and numerical health.
+    pub health: Health,
+    /// True when an aiding update was applied in this period.
+    pub updated: bool,
+}
+
+impl<T: Real> Default for OtsReport<T> {
+    fn default() -> Self {
+        Self {
+            phase: Phase::Aligning,
+            status: [ChannelState::NotMonitored; 6],
+            fault_estimate: ImuVec::zeros(),
+            fault_sigma: ImuVec::zeros(),
+            total_bias: ImuVec::zeros(),
+            corrected_imu: ImuVec::zeros(),
+            state: StateVec::zeros(),
+            state_sigma: StateVec::zeros(),
+            health: Health::default(),
+            updated: false,
+        }
+    }
+}
+
+/// The optimal two-stage UKF monitor (\[OTS\], SPEC §6) for one IMU.
+///
+/// Per step: input checks → time update with the corrected input
+/// `u_m − f̂` (Jacobians at the full estimate) → two-stage measurement
+/// update → outputs. After alignment and a convergence period the fault
+/// estimate at the end of a learning period is taken as the nominal bias
+/// `b` (SPEC §8a); from then on a channel whose `f̂ − b` leaves its
+/// hysteresis band is reported faulty. The corrected sample always removes
+/// the whole `f̂`.
+#[derive(Debug, Clone)]
+pub struct OtsukfMonitor<T> {
+    cfg: OtsukfConfig<T>,
+    model: VehicleModel<T>,
+    meas: MeasurementModel<T>,
+    filter: TwoStageUkf<T, 6, 13, 6>,
+    gate: Gate<T, NZ>,
+    phase: Phase,
+    phase_time: T,
+    nominal: ImuVec<T>,
+    latched: [i8; 6],
+}
+
+impl<T: Real> OtsukfMonitor<T> {
+    /// A monitor waiting for its first attitude measurement.
+    pub fn new(cfg: OtsukfConfig<T>) -> Result<Self, ConfigError> {
+        cfg.validate()?;
+        let b = &cfg.base;
+        let p0 = Mat6::from_diagonal(&b.initial_sigma.component_mul(&b.initial_sigma));
+        let pf0 = Mat6::from_diagonal(&cfg.fault_sigma0.component_mul(&cfg.fault_sigma0));
+        let qf = Mat6::from_diagonal(&(cfg.fault_psd * b.imu_period));
+        let mut filter = TwoStageUkf::new(
+            StateVec::zeros(),
+            p0,
+            ImuVec::zeros(),
+            pf0,
+            qf,
+            &b.sigma,
+            STATE_ANGLES,
+        )
+        .ok_or(ConfigError::SigmaParams)?;
+        filter.set_min_variance(StateVec::from_element(T::lit(1e-14)));
+        let mut meas = MeasurementModel::new(b.aiding);
+        meas.lever_arm = Vector3::new(b.lever_arm[0], b.lever_arm[1], b.lever_arm[2]);
+        Ok(Self {
+            model: VehicleModel {
+                gravity: b.gravity,
+                cos_pitch_min: b.cos_pitch_min,
+            },
+            meas,
+            filter,
+            gate: Gate::new(b.gate_sigma, b.gate_max_rejections),
+            phase: Phase::Aligning,
+            phase_time: T::zero(),
+            nominal: ImuVec::zeros(),
+            latched: [0; 6],
+            cfg,
+        })
+    }
+
+    /// The two-stage filter.
+    pub fn filter(&self) -> &TwoStageUkf<T, 6, 13, 6> {
+        &self.filter
+    }
+
+    /// One monitor period with the measured `dt` and whatever aiding
+    /// arrived. Never panics; anomalies are reported in the health flags.
+    pub fn step(&mut self, imu: &ImuVec<T>, dt: T, aiding: &Measurement<T>) -> OtsReport<T> {
+        let b = self.cfg.base;
+        let mut health = Health::default();
+        let in_range = imu
+            .iter()
+            .zip(b.full_scale.iter())
+            .all(|(v, fs)| v.finite() && v.abs() <= *fs * T::lit(1.5));
+        health.input_invalid = !in_range;
+        let dt_ok = dt.finite() && dt > T::zero() && dt <= b.imu_period * T::lit(5.0);
+        health.dt_out_of_range = !dt_ok;
+        let u_corr = imu - self.filter.fault();
+        let omega = if in_range {
+            u_corr.fixed_rows::<3>(3).into_owned()
+        } else {
+            Vector3::zeros()
+        };
+        if self.phase == Phase::Aligning {
+            self.try_align(aiding, &omega);
+            return self.compose(imu, health, false);
+        }
+        if in_range && dt_ok {
+            match self.predict(&u_corr, dt) {
+                Ok(reset) => health.covariance_reset |= reset,
+                Err(ModelError::PitchSingularity) => health.pitch_singular = true,
+                Err(ModelError::NonFinite) => health.input_invalid = true,
+            }
+            self.phase_time += dt;
+        }
+        let mut updated = false;
+        if aiding.any() && !health.pitch_singular {
+            let mut available = aiding.available;
+            for (a, z) in available.iter_mut().zip(aiding.z.iter()) {
+                *a = *a && z.finite();
+            }
+            let x_pred = self.filter.state();
+            let hjac = self.meas.jacobian(&x_pred, &omega);
+            let r = b.meas_sigma.component_mul(&b.meas_sigma);
+            let meas = self.meas;
+            match self.filter.update(
+                &aiding.z,
+                &available,
+                |s| Ok::<_, ModelError>(meas.predict(s, &omega)),
+                &hjac,
+                &r,
+                &MEAS_ANGLES,
+                &mut self.gate,
+            ) {
+                Ok(out) => {
+                    updated = true;
+                    health.aiding_rejected = out.bias_free.diag.iter().any(|d| d.available && !d.fused);
+                    health.covariance_reset |= out.bias_free.covariance_reset.is_some();
+                }
+                Err(_) => health.covariance_reset = true,
+            }
+        }
+        self.advance_phase();
+        if self.phase == Phase::Monitoring {
+            self.decide();
+        }
+        self.compose(imu, health, updated)
+    }
+
+    fn try_align(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>) {
+        let att = aiding
+            .available
+            .get(ROLL..=YAW)
+            .is_some_and(|a| a.iter().all(|v| *v));
+        if !att || !aiding.z.iter().skip(ROLL).all(|v| v.finite()) {
+            return;
+        }
+        let mut x = StateVec::zeros();
+        x.fixed_rows_mut::<3>(ROLL)
+            .copy_from(&aiding.z.fixed_rows::<3>(ROLL));
+        if self.model.check_attitude(&x).is_err() {
+            return;
+        }
+        let vel = aiding.available.iter().take(3).all(|v| *v)
+            && aiding.z.iter().take(3).all(|v| v.finite());
+        if vel {
+            let v: Vector3<T> = aiding.z.fixed_rows::<3>(0).into_owned();
+            let v_imu = self.meas.velocity_to_body(&x, &v) - omega.cross(&self.meas.lever_arm);
+            x.fixed_rows_mut::<3>(0).copy_from(&v_imu);
+        }
+        let s = self.cfg.base.initial_sigma;
+        self.filter
+            .reset_state(x, Mat6::from_diagonal(&s.component_mul(&s)));
+        self.phase = Phase::Converging;
+        self.phase_time = T::zero();
+    }
+
+    fn predict(&mut self, u_corr: &ImuVec<T>, dt: T) -> Result<bool, ModelError> {
+        let x = self.filter.state();
+        let trig = self.model.attitude_trig(&x)?;
+        let (a, b) = self.model.jacobians(&x, u_corr, &trig);
+        let qx = discrete_process_noise_structured(&a, &b, &self.cfg.base.process_noise, dt);
+        let ad = a * dt;
+        let phi = Mat6::identity() + ad + ad * ad * T::lit(0.5);
+        // x_{k+1} = step(x, u_m − f): ∂/∂f = −(I + A dt/2) B dt for the
+        // midpoint rule.
+        let fmat = -(Mat6::identity() + ad * T::lit(0.5)) * b * dt;
+        self.filter
+            .set_fault_noise(Mat6::from_diagonal(&(self.cfg.fault_psd * dt)));
+        let model = self.model;
+        let u = *u_corr;
+        match self
+            .filter
+            .predict(|s| model.step(s, &u, dt), &phi, &fmat, &qx)
+        {
+            Ok(()) => Ok(false),
+            Err(UkfError::CovarianceReset(_)) => Ok(true),
+            Err(UkfError::Model(e)) => Err(e),
+            Err(_) => Err(ModelError::NonFinite),
+        }
+    }
+
+    fn advance_phase(&mut self) {
+        let b = &self.cfg.base;
+        match self.phase {
+            Phase::Converging if self.phase_time >= b.converge_s => self.phase = Phase::Learning,
+            Phase::Learning if self.phase_time >= b.converge_s + b.learn_s => {
+                // The nominal bias (SPEC §8a): what the filter attributes to
+                // the IMU once converged, capped like the innovation monitor's.
+                let cap = T::lit(20.0);
+                self.nominal = self.filter.fault().zip_map(&b.min_fault, |f, m| f.max(-m * cap).min(m * cap));
+                self.latched = [0; 6];
+                self.phase = Phase::Monitoring;
+            }
+            _ => {}
+        }
+    }
+
+    fn decide(&mut self) {
+        let f = self.filter.fault() - self.nominal;
+        let pf = self.filter.fault_covariance();
+        for (j, l) in self.latched.iter_mut().enumerate() {
+            let (Some(fj), Some(var), Some(min)) = (
+                f.get(j).copied(),
+                pf.get((j, j)).copied(),
+                self.cfg.base.min_fault.get(j).copied(),
+            ) else {
+                continue;
+            };
+            let sigma = var.max(T::zero()).sqrt_fast();
+            let mag = fj.abs();
+            if *l == 0 {
+                if mag >= self.cfg.k_on * sigma && mag >= min {
+                    *l = if fj > T::zero() { 1 } else { -1 };
+                }
+            } else if mag < self.cfg.k_off * sigma || mag < min * T::lit(0.5) || (fj > T::zero()) != (*l > 0) {
+                *l = 0;
+            }
+        }
+    }
+
+    fn compose(&self, imu: &ImuVec<T>, health: Health, updated: bool) -> OtsReport<T> {
+        let fault = *self.filter.fault();
+        let pf = self.filter.fault_covariance();
+        let px = self.filter.state_covariance();
+        let status = if self.phase == Phase::Monitoring {
+            self.latched.map(|l| match l {
+                1 => ChannelState::FaultPositive,
+                -1 => ChannelState::FaultNegative,
+                _ => ChannelState::Healthy,
+            })
+        } else {
+            [ChannelState::NotMonitored; 6]
+        };
+        OtsReport {
+            phase: self.phase,
+            status,
+            fault_estimate: fault - self.nominal,
+            fault_sigma: pf.diagonal().map(|v| v.max(T::zero()).sqrt_fast()),
+            total_bias: fault,
+            corrected_imu: imu - fault,
+            state: self.filter.state(),
+            state_sigma: px.diagonal().map(|v| v.max(T::zero()).sqrt_fast()),
+            health,
+            updated,
+        }
+    }
+}
