@@ -302,7 +302,8 @@ impl Scenario {
     }
 
     /// Names accepted by [`Scenario::builtin`].
-    pub const BUILTIN: [&'static str; 6] = ["s1", "s2", "s3", "s3-paper", "auv-hour", "aircraft-hour"];
+    pub const BUILTIN: [&'static str; 6] =
+        ["s1", "s2", "s3", "s3-paper", "auv-hour", "aircraft-hour"];
 
     /// The additive fault on every channel at `t`.
     pub fn fault_at(&self, t: f64) -> [f64; 6] {

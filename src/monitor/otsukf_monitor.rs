@@ -31,6 +31,17 @@ pub struct OtsukfConfig<T> {
     pub k_on: T,
     /// …and cleared when `|f̂ − b| < k_off·σ_f` or `|f̂ − b| < min_fault/2`.
     pub k_off: T,
+    /// Adaptive fault noise: when one update moves a channel's fault
+    /// estimate by more than `adapt_k` of its standard deviation (the fault
+    /// filter is being pulled by a change it was not expecting), that
+    /// channel's `Q^f` is multiplied by `adapt_gain` for `adapt_hold_s`, so a
+    /// step is followed in a few aiding periods instead of being smoothed by
+    /// a random walk tuned for a quiet bias. `adapt_gain = 1` disables it.
+    pub adapt_k: T,
+    /// See [`adapt_k`](Self::adapt_k).
+    pub adapt_gain: T,
+    /// See [`adapt_k`](Self::adapt_k).
+    pub adapt_hold_s: T,
 }
 
 impl<T: Real> OtsukfConfig<T> {
@@ -55,6 +66,9 @@ impl<T: Real> OtsukfConfig<T> {
             ),
             k_on: T::lit(5.0),
             k_off: T::lit(2.0),
+            adapt_k: T::lit(3.0),
+            adapt_gain: T::lit(10.0),
+            adapt_hold_s: T::lit(0.3),
         }
     }
 
@@ -143,6 +157,7 @@ pub struct OtsukfMonitor<T> {
     phase_time: T,
     nominal: ImuVec<T>,
     latched: [i8; 6],
+    boost: ImuVec<T>,
 }
 
 impl<T: Real> OtsukfMonitor<T> {
@@ -178,6 +193,7 @@ impl<T: Real> OtsukfMonitor<T> {
             phase_time: T::zero(),
             nominal: ImuVec::zeros(),
             latched: [0; 6],
+            boost: ImuVec::zeros(),
             cfg,
         })
     }
@@ -227,6 +243,8 @@ impl<T: Real> OtsukfMonitor<T> {
             let hjac = self.meas.jacobian(&x_pred, &omega);
             let r = b.meas_sigma.component_mul(&b.meas_sigma);
             let meas = self.meas;
+            let prior_var = self.filter.fault_covariance().diagonal();
+            let prior_fault = *self.filter.fault();
             match self.filter.update(
                 &aiding.z,
                 &available,
@@ -238,7 +256,19 @@ impl<T: Real> OtsukfMonitor<T> {
             ) {
                 Ok(out) => {
                     updated = true;
-                    health.aiding_rejected = out.bias_free.diag.iter().any(|d| d.available && !d.fused);
+                    // The correction K^f r^f has covariance P^f⁻ − P^f⁺ under
+                    // the fault model: standardise it by that.
+                    let moved = self.filter.fault() - prior_fault;
+                    let spread = prior_var - self.filter.fault_covariance().diagonal();
+                    for ((bst, m), v) in self.boost.iter_mut().zip(moved.iter()).zip(spread.iter())
+                    {
+                        let s = v.max(T::zero()).sqrt_fast();
+                        if s > T::zero() && m.abs() > self.cfg.adapt_k * s {
+                            *bst = self.cfg.adapt_hold_s;
+                        }
+                    }
+                    health.aiding_rejected =
+                        out.bias_free.diag.iter().any(|d| d.available && !d.fused);
                     health.covariance_reset |= out.bias_free.covariance_reset.is_some();
                 }
                 Err(_) => health.covariance_reset = true,
@@ -289,8 +319,19 @@ impl<T: Real> OtsukfMonitor<T> {
         // x_{k+1} = step(x, u_m − f): ∂/∂f = −(I + A dt/2) B dt for the
         // midpoint rule.
         let fmat = -(Mat6::identity() + ad * T::lit(0.5)) * b * dt;
-        self.filter
-            .set_fault_noise(Mat6::from_diagonal(&(self.cfg.fault_psd * dt)));
+        let gain = self.cfg.adapt_gain;
+        let qf = self.cfg.fault_psd.zip_map(
+            &self.boost,
+            |q, b| {
+                if b > T::zero() {
+                    q * gain
+                } else {
+                    q
+                }
+            },
+        ) * dt;
+        self.boost = self.boost.map(|b| (b - dt).max(T::zero()));
+        self.filter.set_fault_noise(Mat6::from_diagonal(&qf));
         let model = self.model;
         let u = *u_corr;
         match self
@@ -312,7 +353,10 @@ impl<T: Real> OtsukfMonitor<T> {
                 // The nominal bias (SPEC §8a): what the filter attributes to
                 // the IMU once converged, capped like the innovation monitor's.
                 let cap = T::lit(20.0);
-                self.nominal = self.filter.fault().zip_map(&b.min_fault, |f, m| f.max(-m * cap).min(m * cap));
+                self.nominal = self
+                    .filter
+                    .fault()
+                    .zip_map(&b.min_fault, |f, m| f.max(-m * cap).min(m * cap));
                 self.latched = [0; 6];
                 self.phase = Phase::Monitoring;
             }
@@ -337,7 +381,10 @@ impl<T: Real> OtsukfMonitor<T> {
                 if mag >= self.cfg.k_on * sigma && mag >= min {
                     *l = if fj > T::zero() { 1 } else { -1 };
                 }
-            } else if mag < self.cfg.k_off * sigma || mag < min * T::lit(0.5) || (fj > T::zero()) != (*l > 0) {
+            } else if mag < self.cfg.k_off * sigma
+                || mag < min * T::lit(0.5)
+                || (fj > T::zero()) != (*l > 0)
+            {
                 *l = 0;
             }
         }

@@ -393,9 +393,15 @@ fn main() -> Result<()> {
             augmented,
             f32,
         } => {
-            use hal_sim::ots::{otsukf_config, run_augmented, run_otsukf, RmseAccumulator, Setting, PAPER_RMSE};
+            use hal_sim::ots::{
+                otsukf_config, run_augmented, run_otsukf, RmseAccumulator, Setting, PAPER_RMSE,
+            };
             let scn = scenario(&name)?;
-            let setting = if name.contains("paper") { Setting::Paper } else { Setting::Realistic };
+            let setting = if name.contains("paper") {
+                Setting::Paper
+            } else {
+                Setting::Realistic
+            };
             let (mut two, mut aug) = (RmseAccumulator::default(), RmseAccumulator::default());
             let mut false_flags = 0u64;
             for seed in first_seed..first_seed + seeds {
@@ -420,14 +426,34 @@ fn main() -> Result<()> {
                 first_seed + seeds - 1
             );
             out!("units: u v w m/s; φ θ ψ deg; f_a m/s²; f_g °/s");
-            out!("{:<6} {:>12} {:>12} {:>10}", "", "two-stage", if augmented { "augmented" } else { "" }, "paper");
-            let names = ["u", "v", "w", "φ", "θ", "ψ", "f_ax", "f_ay", "f_az", "f_p", "f_q", "f_r"];
+            out!(
+                "{:<6} {:>12} {:>12} {:>10}",
+                "",
+                "two-stage",
+                if augmented { "augmented" } else { "" },
+                "paper"
+            );
+            let names = [
+                "u", "v", "w", "φ", "θ", "ψ", "f_ax", "f_ay", "f_az", "f_p", "f_q", "f_r",
+            ];
             let (r2, ra) = (two.rmse(), aug.rmse());
             for i in 0..12 {
                 if augmented {
-                    out!("{:<6} {:>12.4} {:>12.4} {:>10.4}", names[i], r2[i], ra[i], PAPER_RMSE[i]);
+                    out!(
+                        "{:<6} {:>12.4} {:>12.4} {:>10.4}",
+                        names[i],
+                        r2[i],
+                        ra[i],
+                        PAPER_RMSE[i]
+                    );
                 } else {
-                    out!("{:<6} {:>12.4} {:>12} {:>10.4}", names[i], r2[i], "", PAPER_RMSE[i]);
+                    out!(
+                        "{:<6} {:>12.4} {:>12} {:>10.4}",
+                        names[i],
+                        r2[i],
+                        "",
+                        PAPER_RMSE[i]
+                    );
                 }
             }
             out!("false flags (monitoring samples flagged on a channel without a fault in the last 2 s): {false_flags}");
