@@ -118,3 +118,38 @@ fn f32_follows_f64_on_s3() {
     assert!(worst < 0.1, "{worst}");
     assert!(differing < 20, "{differing}");
 }
+
+/// 24 simulated hours of the aircraft in `f32` (fault-free, MEMS errors):
+/// no NaN, no covariance loss, no false flag. Ignored (about a minute in
+/// release): `cargo test --release -p hal-sim --test otsukf_s3 -- --ignored`.
+#[test]
+#[ignore]
+fn f32_day_long_run_stays_finite_without_false_flags() {
+    let scn = Scenario::aircraft_fault_free(24.0 * 3600.0);
+    let mut m = OtsukfMonitor::<f32>::new(otsukf_config(&scn, Setting::Realistic)).unwrap();
+    let (mut resets, mut flags, mut steps) = (0u64, 0u64, 0u64);
+    let mut worst_sigma = 0.0f32;
+    for s in Simulator::new(&scn, 7) {
+        let imu = s.imu.unwrap();
+        let r = m.step(
+            &ImuVec::from_fn(|i, _| imu[i] as f32),
+            s.dt as f32,
+            &Measurement {
+                z: MeasVec::from_fn(|i, _| s.aiding[i] as f32),
+                available: s.aiding_available,
+            },
+        );
+        assert!(
+            r.state.iter().chain(r.fault_estimate.iter()).all(|v| v.is_finite()),
+            "non-finite at {} s",
+            s.t
+        );
+        resets += u64::from(r.health.covariance_reset);
+        flags += u64::from(r.status.iter().any(|c| matches!(c.sign(), Some(v) if v != 0)));
+        worst_sigma = worst_sigma.max(r.fault_sigma.amax());
+        steps += 1;
+    }
+    println!("24 h f32: {steps} steps, covariance resets {resets}, flagged samples {flags}, largest fault σ {worst_sigma:e}");
+    assert_eq!(resets, 0);
+    assert_eq!(flags, 0);
+}

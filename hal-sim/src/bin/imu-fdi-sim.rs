@@ -117,7 +117,7 @@ enum Cmd {
         #[arg(long)]
         f32: bool,
     },
-    /// Run a built-in scenario (s1, s2, auv-hour, aircraft-hour) over seeds and print the per-channel table.
+    /// Run a built-in scenario (s1, s2, s3, s3-paper, auv-hour, aircraft-hour) over seeds and print the per-channel table.
     Scenario {
         /// Scenario name.
         name: String,
