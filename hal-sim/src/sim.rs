@@ -154,7 +154,23 @@ impl Iterator for Simulator {
         }
         let rate = self.scenario.imu_rate_hz;
         let t = self.k as f64 / rate;
-        let truth = self.trajectory.at(t);
+        let mut truth = self.trajectory.at(t);
+        if self.k > 0 {
+            // A real IMU outputs the mean of its signal over the sample
+            // period (decimation filter), and the filters integrate that
+            // sample over the same period: an instantaneous end-of-period
+            // value would put a systematic ½·u̇·dt into every step (0.2 °/s
+            // in S3's gusts). Simpson's rule over [t − dt, t].
+            let early = self.trajectory.at(t - 1.0 / rate).imu;
+            let mid = self.trajectory.at(t - 0.5 / rate).imu;
+            let end = truth.imu;
+            truth.imu = core::array::from_fn(|i| {
+                (early.get(i).copied().unwrap_or(0.0)
+                    + 4.0 * mid.get(i).copied().unwrap_or(0.0)
+                    + end.get(i).copied().unwrap_or(0.0))
+                    / 6.0
+            });
+        }
         let fault = self.scenario.fault_at(t);
         let fault_active = core::array::from_fn(|c| self.scenario.fault_active(c, t));
         let mut sample = self.imu.measure(&truth.imu, &fault, &mut self.rng_imu);

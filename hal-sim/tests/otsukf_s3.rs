@@ -38,16 +38,18 @@ fn paper_setting_accuracy_and_agreement_with_the_augmented_ukf() {
     println!("S3 paper setting, seeds {SEEDS:?}: two-stage {r2:.4?}\n augmented {ra:.4?}");
     assert_eq!(ff, 0, "false flags");
     // Accelerometer faults at or below the paper's RMSE (measured over seeds
-    // 100–119: 0.094–0.100 m/s²).
+    // 100–119: 0.092–0.093 m/s²).
     for c in 6..9 {
         assert!(r2[c] <= PAPER_RMSE[c], "{c}: {} > {}", r2[c], PAPER_RMSE[c]);
     }
-    // Gyro q and r within 25 % of the paper (measured 0.103, 0.093 °/s);
-    // p is not (measured 0.24 °/s, as for the augmented UKF: see the issue note).
-    assert!(r2[10] <= 1.25 * PAPER_RMSE[10] && r2[11] <= 1.25 * PAPER_RMSE[11]);
-    assert!(r2[9] < 0.3);
+    // Gyro faults within 15 % of the paper (measured over seeds 100–119:
+    // 0.091–0.093 °/s against 0.085–0.086).
+    for c in 9..12 {
+        assert!(r2[c] <= 1.15 * PAPER_RMSE[c], "{c}: {} > 1.15 × {}", r2[c], PAPER_RMSE[c]);
+    }
     // The two-stage filter tracks the augmented UKF: per-channel RMSE within
-    // 10 % of it (measured over seeds 100–119: 0.84–1.03×).
+    // 10 % of it (measured over seeds 100–119: 0.86–0.88× in the paper
+    // setting, 0.91–1.05× in the realistic one).
     for c in 6..12 {
         assert!(
             r2[c] <= 1.1 * ra[c],
@@ -73,7 +75,8 @@ fn realistic_setting_has_no_false_flags_and_tracks_the_augmented_ukf() {
             ra[c]
         );
     }
-    // Accelerometer faults ≤ 0.3 m/s², gyro ≤ 0.45 °/s (measured ≈ 0.26, 0.34–0.41).
+    // Accelerometer faults ≤ 0.3 m/s², gyro ≤ 0.45 °/s (measured over seeds
+    // 100–119: 0.26–0.27, 0.32–0.41).
     assert!(r2[6..9].iter().all(|v| *v < 0.3));
     assert!(r2[9..12].iter().all(|v| *v < 0.45));
 }
