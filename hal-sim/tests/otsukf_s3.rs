@@ -45,7 +45,12 @@ fn paper_setting_accuracy_and_agreement_with_the_augmented_ukf() {
     // Gyro faults within 15 % of the paper (measured over seeds 100–119:
     // 0.091–0.093 °/s against 0.085–0.086).
     for c in 9..12 {
-        assert!(r2[c] <= 1.15 * PAPER_RMSE[c], "{c}: {} > 1.15 × {}", r2[c], PAPER_RMSE[c]);
+        assert!(
+            r2[c] <= 1.15 * PAPER_RMSE[c],
+            "{c}: {} > 1.15 × {}",
+            r2[c],
+            PAPER_RMSE[c]
+        );
     }
     // The two-stage filter tracks the augmented UKF: per-channel RMSE within
     // 10 % of it (measured over seeds 100–119: 0.86–0.88× in the paper
@@ -143,12 +148,19 @@ fn f32_day_long_run_stays_finite_without_false_flags() {
             },
         );
         assert!(
-            r.state.iter().chain(r.fault_estimate.iter()).all(|v| v.is_finite()),
+            r.state
+                .iter()
+                .chain(r.fault_estimate.iter())
+                .all(|v| v.is_finite()),
             "non-finite at {} s",
             s.t
         );
         resets += u64::from(r.health.covariance_reset);
-        flags += u64::from(r.status.iter().any(|c| matches!(c.sign(), Some(v) if v != 0)));
+        flags += u64::from(
+            r.status
+                .iter()
+                .any(|c| matches!(c.sign(), Some(v) if v != 0)),
+        );
         worst_sigma = worst_sigma.max(r.fault_sigma.amax());
         steps += 1;
     }
