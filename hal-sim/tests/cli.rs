@@ -115,3 +115,31 @@ fn closed_stdout_ends_quietly_instead_of_panicking() {
     assert!(!err.contains("panicked"), "{err}");
     assert!(out.status.success());
 }
+
+#[test]
+fn otsukf_prints_the_rmse_table_beside_the_paper() {
+    let o = bin()
+        .args(["otsukf", "s3-paper", "--seeds", "1", "--augmented"])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("two-stage") && text.contains("augmented") && text.contains("paper"));
+    // The paper's f_ax RMSE is printed beside ours, and there are no false flags.
+    let fax = text.lines().find(|l| l.starts_with("f_ax")).unwrap();
+    let cols: Vec<f64> = fax
+        .split_whitespace()
+        .skip(1)
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert_eq!(cols.len(), 3);
+    assert_eq!(cols[2], 0.1087);
+    assert!(cols[0] > 0.0 && cols[0] < 0.2, "{fax}");
+    assert!(text.contains("in the last 2 s): 0"));
+    let bad = bin()
+        .args(["otsukf", "s3", "--seeds", "0"])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--seeds must be at least 1"));
+}

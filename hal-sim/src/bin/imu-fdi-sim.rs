@@ -397,6 +397,9 @@ fn main() -> Result<()> {
                 otsukf_config, run_augmented, run_otsukf, RmseAccumulator, Setting, PAPER_RMSE,
             };
             let scn = scenario(&name)?;
+            if seeds == 0 {
+                return Err(anyhow!("--seeds must be at least 1"));
+            }
             let setting = if name.contains("paper") {
                 Setting::Paper
             } else {
