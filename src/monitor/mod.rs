@@ -10,5 +10,5 @@ mod ukf_monitor;
 pub use config::{ConfigError, UkfMonitorConfig};
 pub use otsukf_monitor::{OtsReport, OtsukfConfig, OtsukfMonitor};
 pub use report::{ChannelState, Health, Phase, Report};
-pub use task::{Monitor, TaskReport};
+pub use task::{Monitor, PeriodicMonitor, TaskReport, Verdict};
 pub use ukf_monitor::{UkfMonitor, DEFAULT_WINDOW, MAX_DELAY_STEPS};

@@ -48,7 +48,8 @@ impl<T: Real> OtsukfConfig<T> {
     /// Defaults around an innovation-monitor configuration: fault random walk
     /// of 0.05 (m/s²)²/s and (0.5 °/s)²/s — a step is followed within about a
     /// second at 10 Hz aiding — initial fault σ of 1 m/s² and 1 °/s, and a
-    /// 5σ / 2σ hysteresis.
+    /// 4σ / 2σ hysteresis (4σ: the 0.3 m/s² step of S2 is flagged while
+    /// S2, S3 and 24 fault-free hours raise no false flag).
     pub fn from_base(base: UkfMonitorConfig<T>) -> Self {
         let deg = core::f64::consts::PI / 180.0;
         let ga = T::lit(0.05);
@@ -64,7 +65,7 @@ impl<T: Real> OtsukfConfig<T> {
                 T::lit(deg),
                 T::lit(deg),
             ),
-            k_on: T::lit(5.0),
+            k_on: T::lit(4.0),
             k_off: T::lit(2.0),
             adapt_k: T::lit(3.0),
             adapt_gain: T::lit(10.0),

@@ -2,7 +2,7 @@
 //! called once per period with the measured `dt`.
 
 use super::{
-    ChannelState, ConfigError, Health, Phase, UkfMonitor, UkfMonitorConfig, DEFAULT_WINDOW,
+    ChannelState, ConfigError, Health, OtsukfMonitor, Phase, UkfMonitor, UkfMonitorConfig,
 };
 use crate::imu::Imu;
 use crate::model::{ImuVec, Measurement};
@@ -12,7 +12,7 @@ use crate::model::{ImuVec, Measurement};
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TaskReport {
-    /// Life-cycle phase of the UKF monitor.
+    /// Life-cycle phase of the monitor.
     pub phase: Phase,
     /// Verdict per channel `[a_x, a_y, a_z, p, q, r]`.
     pub status: [ChannelState; 6],
@@ -30,12 +30,63 @@ pub struct TaskReport {
     pub missed_samples: u32,
 }
 
-/// The monitor task. Today it runs the UKF innovation monitor; the
-/// two-stage filter and parity sets plug in beside it.
+/// What a single-IMU monitor tells the task every period.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Verdict {
+    /// Life-cycle phase.
+    pub phase: Phase,
+    /// Verdict per channel.
+    pub status: [ChannelState; 6],
+    /// Fault estimate per channel (SI units).
+    pub fault_estimate: ImuVec<f32>,
+    /// The sample corrected by the monitor.
+    pub corrected_imu: ImuVec<f32>,
+    /// Input and numerical health.
+    pub health: Health,
+}
+
+/// A single-IMU monitor the periodic task can run: the UKF innovation
+/// monitor ([`UkfMonitor`]) or the optimal two-stage UKF
+/// ([`OtsukfMonitor`]).
+pub trait PeriodicMonitor {
+    /// One period with the measured `dt` (a NaN sample means "no sample").
+    fn step_period(&mut self, imu: &ImuVec<f32>, dt: f32, aiding: &Measurement<f32>) -> Verdict;
+}
+
+impl<const W: usize> PeriodicMonitor for UkfMonitor<f32, W> {
+    fn step_period(&mut self, imu: &ImuVec<f32>, dt: f32, aiding: &Measurement<f32>) -> Verdict {
+        let r = self.step(imu, dt, aiding);
+        Verdict {
+            phase: r.phase,
+            status: r.status,
+            fault_estimate: r.fault_estimate,
+            corrected_imu: r.corrected_imu,
+            health: r.health,
+        }
+    }
+}
+
+impl PeriodicMonitor for OtsukfMonitor<f32> {
+    fn step_period(&mut self, imu: &ImuVec<f32>, dt: f32, aiding: &Measurement<f32>) -> Verdict {
+        let r = self.step(imu, dt, aiding);
+        Verdict {
+            phase: r.phase,
+            status: r.status,
+            fault_estimate: r.fault_estimate,
+            corrected_imu: r.corrected_imu,
+            health: r.health,
+        }
+    }
+}
+
+/// The monitor task: an IMU driver and one [`PeriodicMonitor`] — by
+/// default the UKF innovation monitor; [`Monitor::with_monitor`] runs any
+/// other (e.g. the two-stage UKF, whose corrected sample removes the
+/// estimated fault continuously).
 #[derive(Debug)]
-pub struct Monitor<I, const W: usize = DEFAULT_WINDOW> {
+pub struct Monitor<I, M = UkfMonitor<f32>> {
     imu: I,
-    ukf: UkfMonitor<f32, W>,
+    ukf: M,
     pending_dt: f32,
     last_sequence: Option<u32>,
     read_failures: u32,
@@ -43,22 +94,29 @@ pub struct Monitor<I, const W: usize = DEFAULT_WINDOW> {
     last_corrected: [f32; 6],
 }
 
-impl<I: Imu, const W: usize> Monitor<I, W> {
+impl<I: Imu, const W: usize> Monitor<I, UkfMonitor<f32, W>> {
     /// A task reading `imu` and running a UKF monitor configured by `cfg`.
     pub fn new(imu: I, cfg: UkfMonitorConfig<f32>) -> Result<Self, ConfigError> {
-        Ok(Self {
+        Ok(Self::with_monitor(imu, UkfMonitor::new(cfg)?))
+    }
+}
+
+impl<I: Imu, M: PeriodicMonitor> Monitor<I, M> {
+    /// A task reading `imu` and running `monitor`.
+    pub fn with_monitor(imu: I, monitor: M) -> Self {
+        Self {
             imu,
-            ukf: UkfMonitor::new(cfg)?,
+            ukf: monitor,
             pending_dt: 0.0,
             last_sequence: None,
             read_failures: 0,
             missed_samples: 0,
             last_corrected: [0.0; 6],
-        })
+        }
     }
 
-    /// The UKF monitor (for its filter, signature matrix, configuration).
-    pub fn ukf(&self) -> &UkfMonitor<f32, W> {
+    /// The monitor (for its filter, configuration, …).
+    pub fn monitor(&self) -> &M {
         &self.ukf
     }
 
@@ -92,11 +150,13 @@ impl<I: Imu, const W: usize> Monitor<I, W> {
             Some(u) => {
                 let dt = self.pending_dt;
                 self.pending_dt = 0.0;
-                self.ukf.step(&u, dt, aiding)
+                self.ukf.step_period(&u, dt, aiding)
             }
             // No sample: let the monitor process the aiding and report; its
             // prediction is skipped (NaN is rejected as invalid input).
-            None => self.ukf.step(&ImuVec::from_element(f32::NAN), dt, aiding),
+            None => self
+                .ukf
+                .step_period(&ImuVec::from_element(f32::NAN), dt, aiding),
         };
         if sample.is_some() {
             self.last_corrected = report.corrected_imu.into();
