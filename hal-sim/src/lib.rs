@@ -12,6 +12,8 @@
 pub mod emulated_icm42688;
 pub mod fault;
 pub mod imu_model;
+#[cfg(all(target_os = "none", feature = "sil"))]
+pub mod qemu;
 pub mod scenario;
 pub mod setup;
 pub mod sim;

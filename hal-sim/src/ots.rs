@@ -7,10 +7,10 @@
 use imu_fdi::filter::{Gate, SigmaParams, Ukf};
 use imu_fdi::math::{wrap_pi, wrap_pi_f64, Real};
 use imu_fdi::model::{
-    discrete_process_noise_structured, ImuVec, MeasVec, Measurement, MeasurementModel, StateVec,
+    discrete_process_noise_structured, ImuVec, MeasVec, Measurement, MeasurementModel,
     VehicleModel, NZ, STATE_ANGLES,
 };
-use imu_fdi::monitor::{OtsukfConfig, OtsukfMonitor, Phase};
+use imu_fdi::monitor::{align_state, OtsukfConfig, OtsukfMonitor, Phase};
 use nalgebra::{SMatrix, SVector, Vector3};
 
 use crate::setup::{monitor_config, RunOptions};
@@ -186,16 +186,11 @@ pub fn run_augmented(
         let u = ImuVec::from_row_slice(&imu);
         let Some(f) = ukf.as_mut() else {
             // Align on the first attitude, like the monitor.
-            if s.aiding_available[3..6].iter().all(|a| *a) {
-                let mut x = StateVec::zeros();
-                for i in 3..6 {
-                    x[i] = s.aiding[i];
-                }
-                if s.aiding_available[..3].iter().all(|a| *a) {
-                    let v = Vector3::new(s.aiding[0], s.aiding[1], s.aiding[2]);
-                    let v_imu = meas.velocity_to_body(&x, &v);
-                    x.fixed_rows_mut::<3>(0).copy_from(&v_imu);
-                }
+            let m = Measurement {
+                z: MeasVec::from_row_slice(&s.aiding),
+                available: s.aiding_available,
+            };
+            if let Some(x) = align_state(&model, &meas, &m, &Vector3::zeros()) {
                 let mut xa = SVector::<f64, 12>::zeros();
                 xa.fixed_rows_mut::<6>(0).copy_from(&x);
                 let mut pa = SMatrix::<f64, 12, 12>::zeros();

@@ -1,12 +1,14 @@
 //! The UKF innovation monitor: filter, closed-loop fault signatures, start-up
 //! learning, drift tracking, detection and estimation in one periodic `step`.
 
+mod align;
 mod config;
 mod otsukf_monitor;
 mod report;
 mod task;
 mod ukf_monitor;
 
+pub use align::align_state;
 pub use config::{ConfigError, UkfMonitorConfig};
 pub use otsukf_monitor::{OtsReport, OtsukfConfig, OtsukfMonitor};
 pub use report::{ChannelState, Health, Phase, Report};

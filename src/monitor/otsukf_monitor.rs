@@ -4,12 +4,13 @@
 
 use nalgebra::Vector3;
 
+use super::align::align_state;
 use super::{ChannelState, ConfigError, Health, Phase, UkfMonitorConfig};
 use crate::filter::{Gate, TwoStageUkf, UkfError};
 use crate::math::Real;
 use crate::model::{
     discrete_process_noise_structured, ImuVec, Mat6, Measurement, MeasurementModel, ModelError,
-    StateVec, VehicleModel, NZ, ROLL, STATE_ANGLES, YAW,
+    StateVec, VehicleModel, NZ, STATE_ANGLES,
 };
 
 const MEAS_ANGLES: [bool; NZ] = [false, false, false, true, true, true];
@@ -283,26 +284,9 @@ impl<T: Real> OtsukfMonitor<T> {
     }
 
     fn try_align(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>) {
-        let att = aiding
-            .available
-            .get(ROLL..=YAW)
-            .is_some_and(|a| a.iter().all(|v| *v));
-        if !att || !aiding.z.iter().skip(ROLL).all(|v| v.finite()) {
+        let Some(x) = align_state(&self.model, &self.meas, aiding, omega) else {
             return;
-        }
-        let mut x = StateVec::zeros();
-        x.fixed_rows_mut::<3>(ROLL)
-            .copy_from(&aiding.z.fixed_rows::<3>(ROLL));
-        if self.model.check_attitude(&x).is_err() {
-            return;
-        }
-        let vel = aiding.available.iter().take(3).all(|v| *v)
-            && aiding.z.iter().take(3).all(|v| v.finite());
-        if vel {
-            let v: Vector3<T> = aiding.z.fixed_rows::<3>(0).into_owned();
-            let v_imu = self.meas.velocity_to_body(&x, &v) - omega.cross(&self.meas.lever_arm);
-            x.fixed_rows_mut::<3>(0).copy_from(&v_imu);
-        }
+        };
         let s = self.cfg.base.initial_sigma;
         self.filter
             .reset_state(x, Mat6::from_diagonal(&s.component_mul(&s)));

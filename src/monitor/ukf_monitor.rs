@@ -1,5 +1,6 @@
 use nalgebra::Vector3;
 
+use super::align::align_state;
 use super::{ChannelState, ConfigError, Health, Phase, Report, UkfMonitorConfig};
 use crate::detect::{
     decouple_flags, estimate_as_written, estimate_corrected, glr_isolate, paper_matrix,
@@ -10,7 +11,7 @@ use crate::filter::{ChannelDiag, Gate, Ukf, UkfError};
 use crate::math::{wrap_pi, Real};
 use crate::model::{
     discrete_process_noise_structured, ImuVec, Mat6, Measurement, MeasurementModel, ModelError,
-    StateVec, VehicleModel, NX, NZ, ROLL, STATE_ANGLES, YAW,
+    StateVec, VehicleModel, NX, NZ, ROLL, STATE_ANGLES,
 };
 use crate::stats::normal_upper_quantile;
 
@@ -261,26 +262,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     }
 
     fn try_align(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>) {
-        let att = aiding
-            .available
-            .get(ROLL..=YAW)
-            .is_some_and(|a| a.iter().all(|v| *v));
-        if !att || !aiding.z.iter().skip(ROLL).all(|v| v.finite()) {
+        let Some(x) = align_state(&self.model, &self.meas, aiding, omega) else {
             return;
-        }
-        let mut x = StateVec::zeros();
-        x.fixed_rows_mut::<3>(ROLL)
-            .copy_from(&aiding.z.fixed_rows::<3>(ROLL));
-        if self.model.check_attitude(&x).is_err() {
-            return;
-        }
-        let vel = aiding.available.iter().take(3).all(|v| *v)
-            && aiding.z.iter().take(3).all(|v| v.finite());
-        if vel {
-            let v: Vector3<T> = aiding.z.fixed_rows::<3>(0).into_owned();
-            let v_imu = self.meas.velocity_to_body(&x, &v) - omega.cross(&self.meas.lever_arm);
-            x.fixed_rows_mut::<3>(0).copy_from(&v_imu);
-        }
+        };
         let s = self.cfg.initial_sigma;
         self.ukf.reset(x, Mat6::from_diagonal(&s.component_mul(&s)));
         self.sensitivity = Mat6::zeros();

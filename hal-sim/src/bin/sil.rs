@@ -14,20 +14,15 @@
 #![no_std]
 #![no_main]
 #![allow(clippy::empty_loop)] // reached only after the semihosting exit has stopped QEMU
-#![allow(unsafe_code)] // volatile reads of the timer counter and of the painted stack
+#![allow(unsafe_code)] // the exception handler attribute; volatile reads of the painted stack
 
 use cortex_m_rt::{entry, exception, ExceptionFrame};
 use cortex_m_semihosting::{debug, hprintln};
 use hal_sim::Scenario;
 
-/// TIM2 counter (CNT) of the STM32F4: TIM2 base 0x4000_0000 + 0x24.
-const TIM2_CNT: *const u32 = 0x4000_0024 as *const u32;
-const PAINT: u32 = 0xcccc_cccc;
+use hal_sim::qemu::instructions;
 
-fn instructions() -> u32 {
-    // SAFETY: a read-only, aligned, always-mapped peripheral register.
-    unsafe { core::ptr::read_volatile(TIM2_CNT) }
-}
+const PAINT: u32 = 0xcccc_cccc;
 
 extern "C" {
     static _stack_end: u32;

@@ -9,7 +9,7 @@
 #![no_std]
 #![no_main]
 #![allow(clippy::empty_loop)] // reached only after the semihosting exit has stopped QEMU
-#![allow(unsafe_code)] // the exception handler attribute; volatile reads of the timer counter
+#![allow(unsafe_code)] // the cortex-m-rt exception handler attribute
 
 use cortex_m_rt::{entry, exception, ExceptionFrame};
 use cortex_m_semihosting::{debug, hprintln};
@@ -20,14 +20,7 @@ use imu_fdi::detect::TTest;
 use imu_fdi::math::{cholesky, sin_cos_f32, sqrt_f32};
 use imu_fdi::model::{ImuVec, MeasVec};
 
-/// TIM2 counter (CNT) of the STM32F4: under `qemu-system-arm -icount
-/// shift=0` it advances once per executed instruction.
-const TIM2_CNT: *const u32 = 0x4000_0024 as *const u32;
-
-fn instructions() -> u32 {
-    // SAFETY: a read-only, aligned, always-mapped peripheral register.
-    unsafe { core::ptr::read_volatile(TIM2_CNT) }
-}
+use hal_sim::qemu::instructions;
 
 const EXPECTATIONS: &str = include_str!("../../../tests/data/target_expectations.txt");
 
