@@ -40,4 +40,5 @@ pub mod imu;
 pub mod math;
 pub mod model;
 pub mod monitor;
+pub mod parity;
 pub mod stats;

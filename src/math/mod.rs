@@ -4,6 +4,7 @@
 
 mod angle;
 mod cholesky;
+mod jacobi;
 mod real;
 mod sqrt;
 mod trig;
@@ -13,6 +14,7 @@ pub use cholesky::{
     add_outer_lower, cholesky, cholesky_reference, cholesky_solve_right, mirror_lower, symmetrize,
     LinalgError,
 };
+pub use jacobi::symmetric_eigen;
 pub use real::Real;
 pub use sqrt::sqrt_f32;
 pub use trig::{shift_sin_cos, sin_cos_f32};

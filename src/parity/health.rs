@@ -1,0 +1,252 @@
+//! Hardware health checks every redundant sensor needs, independent of the
+//! parity statistics: frozen output, missing samples, clipping, NaN or
+//! out-of-range values and bus errors.
+
+use crate::math::Real;
+
+/// What the driver delivered for one sensor in one period.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Reading<T> {
+    /// A sample (rad/s or m/s²).
+    Sample(T),
+    /// No new sample this period (data-ready never came, FIFO empty).
+    Missing,
+    /// The SPI/I²C transaction failed.
+    BusError,
+}
+
+/// Health of one sensor this period.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SensorStatus {
+    /// Sample used.
+    #[default]
+    Healthy,
+    /// Sample within `clip_fraction` of full scale: excluded from the
+    /// statistics this period (saturation is not a fault).
+    Clipping,
+    /// Sample missing this period (not yet a timeout).
+    Missing,
+    /// NaN, infinite or beyond full scale this period.
+    OutOfRange,
+    /// Bus error this period.
+    BusError,
+    /// Failed: identical output for `stuck_samples` periods.
+    Stuck,
+    /// Failed: no sample for `timeout_samples` periods.
+    Timeout,
+    /// Failed: out of range for `out_of_range_limit` periods in a row.
+    InvalidOutput,
+    /// Failed: `bus_error_limit` bus errors in a row.
+    BusFailure,
+    /// Failed: isolated by the parity test and removed from the set.
+    ParityIsolated,
+}
+
+impl SensorStatus {
+    /// True for the latched states: the sensor is out of the set until
+    /// [`reset`](super::ParityMonitor::reset).
+    pub fn is_failed(self) -> bool {
+        matches!(
+            self,
+            Self::Stuck
+                | Self::Timeout
+                | Self::InvalidOutput
+                | Self::BusFailure
+                | Self::ParityIsolated
+        )
+    }
+}
+
+/// Limits of the hardware checks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct HealthConfig<T> {
+    /// Full scale of the sensors (rad/s or m/s²).
+    pub full_scale: T,
+    /// A sample at or beyond this fraction of full scale is clipping.
+    pub clip_fraction: T,
+    /// Consecutive bit-identical samples that mean a frozen output. Chosen
+    /// so that noise quantised to a coarse LSB cannot repeat that long by
+    /// chance (at 2,000 °/s full scale the LSB is 0.06 °/s, twice the
+    /// per-sample noise: two equal samples are common, 50 are not).
+    pub stuck_samples: u16,
+    /// Consecutive missing samples that mean a timeout.
+    pub timeout_samples: u16,
+    /// Consecutive out-of-range (NaN, ±∞, beyond full scale) samples that
+    /// mean invalid output.
+    pub out_of_range_limit: u16,
+    /// Consecutive bus errors that mean a failed bus.
+    pub bus_error_limit: u16,
+}
+
+impl<T: Real> HealthConfig<T> {
+    /// Defaults for a sensor of the given full scale at ~100 Hz: clipping
+    /// at 98 % of full scale, stuck after 50 samples, timeout after 10,
+    /// invalid after 5 and bus failure after 10 in a row.
+    pub fn new(full_scale: T) -> Self {
+        Self {
+            full_scale,
+            clip_fraction: T::lit(0.98),
+            stuck_samples: 50,
+            timeout_samples: 10,
+            out_of_range_limit: 5,
+            bus_error_limit: 10,
+        }
+    }
+}
+
+/// Running health state of one sensor.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SensorHealth<T> {
+    last: Option<T>,
+    same: u16,
+    missing: u16,
+    out_of_range: u16,
+    bus_errors: u16,
+    bus_errors_total: u32,
+    latched: Option<SensorStatus>,
+}
+
+impl<T: Real> SensorHealth<T> {
+    /// Checks one reading: returns the usable value (or `None`) and the
+    /// sensor's status for this period. Latched failures stay latched.
+    pub fn check(
+        &mut self,
+        reading: Reading<T>,
+        cfg: &HealthConfig<T>,
+    ) -> (Option<T>, SensorStatus) {
+        let (value, status) = self.classify(reading, cfg);
+        if let Some(failed) = self.latched {
+            return (None, failed);
+        }
+        if status.is_failed() {
+            self.latched = Some(status);
+        }
+        (value, status)
+    }
+
+    fn classify(
+        &mut self,
+        reading: Reading<T>,
+        cfg: &HealthConfig<T>,
+    ) -> (Option<T>, SensorStatus) {
+        match reading {
+            Reading::Missing => {
+                self.missing = self.missing.saturating_add(1);
+                if self.missing >= cfg.timeout_samples {
+                    return (None, SensorStatus::Timeout);
+                }
+                (None, SensorStatus::Missing)
+            }
+            Reading::BusError => {
+                self.bus_errors = self.bus_errors.saturating_add(1);
+                self.bus_errors_total = self.bus_errors_total.saturating_add(1);
+                if self.bus_errors >= cfg.bus_error_limit {
+                    return (None, SensorStatus::BusFailure);
+                }
+                (None, SensorStatus::BusError)
+            }
+            Reading::Sample(x) => {
+                self.missing = 0;
+                self.bus_errors = 0;
+                if !x.finite() || x.abs() > cfg.full_scale {
+                    self.out_of_range = self.out_of_range.saturating_add(1);
+                    if self.out_of_range >= cfg.out_of_range_limit {
+                        return (None, SensorStatus::InvalidOutput);
+                    }
+                    return (None, SensorStatus::OutOfRange);
+                }
+                self.out_of_range = 0;
+                if self.last == Some(x) {
+                    self.same = self.same.saturating_add(1);
+                } else {
+                    self.same = 0;
+                }
+                self.last = Some(x);
+                // `same` counts repeats, so N identical samples = N − 1 repeats.
+                if self.same.saturating_add(1) >= cfg.stuck_samples {
+                    return (None, SensorStatus::Stuck);
+                }
+                if x.abs() >= cfg.clip_fraction * cfg.full_scale {
+                    return (None, SensorStatus::Clipping);
+                }
+                (Some(x), SensorStatus::Healthy)
+            }
+        }
+    }
+
+    /// Marks the sensor failed by the parity test.
+    pub fn isolate(&mut self) {
+        self.latched = Some(SensorStatus::ParityIsolated);
+    }
+
+    /// The latched failure, if any.
+    pub fn failure(&self) -> Option<SensorStatus> {
+        self.latched
+    }
+
+    /// Bus errors seen since start (or the last reset).
+    pub fn bus_errors_total(&self) -> u32 {
+        self.bus_errors_total
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_check_has_its_status_and_latches() {
+        let cfg = HealthConfig::new(10.0_f64);
+        let mut h = SensorHealth::default();
+        assert_eq!(
+            h.check(Reading::Sample(1.0), &cfg),
+            (Some(1.0), SensorStatus::Healthy)
+        );
+        assert_eq!(
+            h.check(Reading::Sample(9.9), &cfg),
+            (None, SensorStatus::Clipping)
+        );
+        assert_eq!(
+            h.check(Reading::Sample(f64::NAN), &cfg).1,
+            SensorStatus::OutOfRange
+        );
+        for _ in 0..3 {
+            h.check(Reading::Sample(11.0), &cfg);
+        }
+        assert_eq!(
+            h.check(Reading::Sample(11.0), &cfg).1,
+            SensorStatus::InvalidOutput
+        );
+        assert_eq!(
+            h.check(Reading::Sample(1.0), &cfg).1,
+            SensorStatus::InvalidOutput
+        );
+
+        let mut h = SensorHealth::default();
+        for k in 0..49 {
+            assert_eq!(
+                h.check(Reading::Sample(0.5), &cfg).1,
+                SensorStatus::Healthy,
+                "{k}"
+            );
+        }
+        assert_eq!(h.check(Reading::Sample(0.5), &cfg).1, SensorStatus::Stuck);
+
+        let mut h = SensorHealth::default();
+        for _ in 0..9 {
+            assert_eq!(h.check(Reading::Missing, &cfg).1, SensorStatus::Missing);
+        }
+        assert_eq!(h.check(Reading::Missing, &cfg).1, SensorStatus::Timeout);
+
+        let mut h = SensorHealth::default();
+        for _ in 0..9 {
+            assert_eq!(h.check(Reading::BusError, &cfg).1, SensorStatus::BusError);
+        }
+        h.check(Reading::Sample(0.1), &cfg);
+        assert_eq!(h.check(Reading::BusError, &cfg).1, SensorStatus::BusError);
+        assert_eq!(h.bus_errors_total(), 10);
+    }
+}
