@@ -9,6 +9,8 @@
 //! replay format ([`replay`]) and the `imu-fdi-sim` CLI.
 #![cfg_attr(not(feature = "std"), no_std)]
 
+pub mod array;
+pub mod baseline;
 pub mod emulated_icm42688;
 pub mod fault;
 pub mod imu_model;
@@ -20,6 +22,8 @@ pub mod sim;
 pub mod target_checks;
 pub mod trajectory;
 
+#[cfg(feature = "std")]
+pub mod array_run;
 #[cfg(feature = "std")]
 pub mod metrics;
 #[cfg(feature = "std")]

@@ -64,8 +64,11 @@ impl<T: Real> ParityConfig<T> {
     /// Gyro array defaults for `rate_hz` samples/s and full scale `fs`
     /// (rad/s): 0.1 s blocks, 1 s window, 30 s training, α = 1e-9 per
     /// decision with margin 1.5, CUSUM tuned to 0.05 °/s with ARL0 10⁹
-    /// decisions, ridge (3 °/s)², drift tracking over 60 s, isolation
-    /// after 3 decisions, GLT-or-CUSUM.
+    /// decisions, ridge (0.5 °/s)² (far below any manoeuvre, far above the
+    /// noise, so a stationary training fits no leakage from noise), drift
+    /// tracking over 5 s (the bias random walk of a consumer MEMS gyro
+    /// moves the offset by several window σ per minute), isolation after 3
+    /// decisions, GLT-or-CUSUM.
     pub fn gyro(rate_hz: f64, fs: T) -> Self {
         let block = libm::round(rate_hz / 10.0).max(1.0);
         let deg = core::f64::consts::PI / 180.0;
@@ -78,19 +81,19 @@ impl<T: Real> ParityConfig<T> {
             threshold_margin: T::lit(1.5),
             cusum_bias: T::lit(0.05 * deg),
             cusum_arl0: 1e9,
-            ridge: T::lit((3.0 * deg) * (3.0 * deg)),
-            drift_blocks: T::lit(600.0),
+            ridge: T::lit((0.5 * deg) * (0.5 * deg)),
+            drift_blocks: T::lit(50.0),
             isolate_after: 3,
             detector: ParityDetector::GltOrCusum,
         }
     }
 
     /// Accelerometer array defaults: as [`gyro`](Self::gyro) with the CUSUM
-    /// tuned to 0.01 m/s² and ridge (0.5 m/s²)².
+    /// tuned to 0.01 m/s² and ridge (0.05 m/s²)².
     pub fn accel(rate_hz: f64, fs: T) -> Self {
         Self {
             cusum_bias: T::lit(0.01),
-            ridge: T::lit(0.25),
+            ridge: T::lit(0.05 * 0.05),
             ..Self::gyro(rate_hz, fs)
         }
     }
