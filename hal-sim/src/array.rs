@@ -44,6 +44,8 @@ pub enum ArrayFaultKind {
     Nan,
     /// Output clamped to ± the given level.
     Clip(f64),
+    /// Output pinned at + full scale (a railed sensor).
+    Saturate,
     /// Spikes of the given amplitude for 30 ms every 0.5 s.
     Spikes(f64),
     /// White noise σ multiplied by the given factor.
@@ -426,6 +428,7 @@ impl<const N: usize> Iterator for ArraySim<N> {
                     ArrayFaultKind::BusError => reading = Some(Reading::BusError),
                     ArrayFaultKind::Nan => reading = Some(Reading::Sample(f64::NAN)),
                     ArrayFaultKind::Clip(level) => clip = clip.min(level),
+                    ArrayFaultKind::Saturate => add += 2.0 * e.full_scale,
                     ArrayFaultKind::Spikes(a) => {
                         if libm::fmod(tau, 0.5) < 0.03 {
                             add += a;

@@ -63,6 +63,18 @@ pub struct ArrayRun {
     pub fused_rms_fault_free: f64,
     /// RMS error of the fused output from 0.5 s after isolation (unit).
     pub fused_rms_after_isolation: Option<f64>,
+    /// RMS of (fused − least squares of the truly healthy sensors, `f64`)
+    /// while fault-free: the monitor's fusion itself (f32 round-off).
+    pub fused_vs_healthy_fault_free: f64,
+    /// The same while a fault is active on a sensor the parity test has not
+    /// isolated: what the fault does to the output before isolation (and,
+    /// for hardware faults, whether the health checks kept it out).
+    pub fused_vs_healthy_before_isolation: Option<f64>,
+    /// The same once every faulty sensor is isolated (from 0.5 s after the
+    /// latest isolation).
+    pub fused_vs_healthy_after_isolation: Option<f64>,
+    /// Sensors isolated, in order, with scenario time.
+    pub isolations: Vec<(usize, f64)>,
     /// Training's correlation factor (1 = white).
     pub correlation_factor: f64,
 }
@@ -110,7 +122,12 @@ pub fn run_array<T: Real, const N: usize>(
         fused_rms_fault_free: 0.0,
         fused_rms_after_isolation: None,
         correlation_factor: 1.0,
+        fused_vs_healthy_fault_free: 0.0,
+        fused_vs_healthy_before_isolation: None,
+        fused_vs_healthy_after_isolation: None,
+        isolations: Vec::new(),
     };
+    let mut rel = [(0.0, 0u64); 3];
     let mut was = [false; 5];
     let (mut ff_sum, mut ff_n) = (0.0, 0u64);
     let (mut iso_sum, mut iso_n) = (0.0, 0u64);
@@ -156,6 +173,39 @@ pub fn run_array<T: Real, const N: usize>(
         }
         if let Some(k) = report.isolated {
             out.isolated.get_or_insert((k, s.t));
+            out.isolations.push((k, s.t));
+        }
+        let healthy: [bool; N] = core::array::from_fn(|i| {
+            !s.fault_active.get(i).copied().unwrap_or(true)
+                && matches!(s.readings.get(i), Some(Reading::Sample(x)) if x.is_finite())
+        });
+        let m64 = SVector::<f64, N>::from_fn(|i, _| match s.readings.get(i) {
+            Some(Reading::Sample(x)) if x.is_finite() => *x,
+            _ => 0.0,
+        });
+        if let (Some(f), Some(h)) = (report.fused, least_squares(&geometry64, &m64, &healthy)) {
+            let d = (Vector3::new(f.x.to_f64(), f.y.to_f64(), f.z.to_f64()) - h).norm_squared();
+            // Slots: fault-free; a fault active on a sensor the parity test
+            // has not isolated; every faulty sensor isolated (0.5 s ago).
+            let pending = s
+                .fault_active
+                .iter()
+                .enumerate()
+                .any(|(k, a)| *a && !out.isolations.iter().any(|(j, _)| *j == k));
+            let last = out.isolations.last().map_or(f64::NEG_INFINITY, |(_, t)| *t);
+            let slot = if !faulty {
+                Some(0)
+            } else if pending {
+                Some(1)
+            } else if s.t >= last + 0.5 {
+                Some(2)
+            } else {
+                None
+            };
+            if let Some(acc) = slot.and_then(|i| rel.get_mut(i)) {
+                acc.0 += d;
+                acc.1 += 1;
+            }
         }
         if let (Some((_, ti)), Some(e)) = (out.isolated, err) {
             if s.t >= ti + 0.5 {
@@ -195,6 +245,10 @@ pub fn run_array<T: Real, const N: usize>(
         let ap_alarm = ap.step(&diff, s.t);
         out.ardupilot.record(ap_alarm, w4, faulty, s.t, None);
     }
+    let rms = |(sum, n): (f64, u64)| (n > 0).then(|| (sum / n as f64).sqrt());
+    out.fused_vs_healthy_fault_free = rms(rel[0]).unwrap_or(0.0);
+    out.fused_vs_healthy_before_isolation = rms(rel[1]);
+    out.fused_vs_healthy_after_isolation = rms(rel[2]);
     out.fused_rms_fault_free = (ff_sum / ff_n.max(1) as f64).sqrt();
     out.fused_rms_after_isolation = (iso_n > 0).then(|| (iso_sum / iso_n as f64).sqrt());
     for (k, st) in monitor.space().active().iter().enumerate() {
@@ -203,6 +257,23 @@ pub fn run_array<T: Real, const N: usize>(
         }
     }
     Ok(out)
+}
+
+/// Least squares over the sensors marked, `None` below rank 3.
+fn least_squares<const N: usize>(
+    g: &Geometry<f64, N>,
+    m: &SVector<f64, N>,
+    mask: &[bool; N],
+) -> Option<Vector3<f64>> {
+    let mut gm = nalgebra::Matrix3::<f64>::zeros();
+    let mut hm = Vector3::<f64>::zeros();
+    for k in (0..N).filter(|k| mask[*k]) {
+        let h = g.direction(k)?;
+        gm += h * h.transpose();
+        hm += h * m[k];
+    }
+    let inv = gm.try_inverse()?;
+    (gm.determinant().abs() > 1e-9).then(|| inv * hm)
 }
 
 /// Per-unit deviation from the mean (PX4) and difference from unit 0
@@ -232,14 +303,7 @@ fn deviations<const N: usize>(
         Layout::Single => {
             let all = [true; N];
             let residual = |mask: &[bool; N], i: usize| {
-                let mut gm = nalgebra::Matrix3::<f64>::zeros();
-                let mut hm = Vector3::<f64>::zeros();
-                for k in (0..N).filter(|k| mask[*k]) {
-                    let h = g.direction(k).unwrap_or_default();
-                    gm += h * h.transpose();
-                    hm += h * m[k];
-                }
-                let x = gm.try_inverse().map_or(Vector3::zeros(), |inv| inv * hm);
+                let x = least_squares(g, m, mask).unwrap_or_default();
                 m[i] - g.direction(i).unwrap_or_default().dot(&x)
             };
             let dev = (0..N).map(|i| [residual(&all, i), 0.0, 0.0]).collect();

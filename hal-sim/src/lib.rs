@@ -25,6 +25,8 @@ pub mod trajectory;
 #[cfg(feature = "std")]
 pub mod array_run;
 #[cfg(feature = "std")]
+pub mod array_sweep;
+#[cfg(feature = "std")]
 pub mod metrics;
 #[cfg(feature = "std")]
 pub mod ots;

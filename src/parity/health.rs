@@ -40,6 +40,9 @@ pub enum SensorStatus {
     InvalidOutput,
     /// Failed: `bus_error_limit` bus errors in a row.
     BusFailure,
+    /// Failed: clipping for `rail_samples` periods in a row while most other
+    /// sensors did not (output railed at full scale).
+    Railed,
     /// Failed: isolated by the parity test and removed from the set.
     ParityIsolated,
 }
@@ -54,6 +57,7 @@ impl SensorStatus {
                 | Self::Timeout
                 | Self::InvalidOutput
                 | Self::BusFailure
+                | Self::Railed
                 | Self::ParityIsolated
         )
     }
@@ -79,12 +83,16 @@ pub struct HealthConfig<T> {
     pub out_of_range_limit: u16,
     /// Consecutive bus errors that mean a failed bus.
     pub bus_error_limit: u16,
+    /// Consecutive clipping samples that mean a railed output, when fewer
+    /// than half of the sensors clip with it (common-mode saturation in a
+    /// violent manoeuvre is not a sensor failure).
+    pub rail_samples: u16,
 }
 
 impl<T: Real> HealthConfig<T> {
     /// Defaults for a sensor of the given full scale at ~100 Hz: clipping
     /// at 98 % of full scale, stuck after 50 samples, timeout after 10,
-    /// invalid after 5 and bus failure after 10 in a row.
+    /// invalid after 5, bus failure after 10 and railed after 100 in a row.
     pub fn new(full_scale: T) -> Self {
         Self {
             full_scale,
@@ -93,6 +101,7 @@ impl<T: Real> HealthConfig<T> {
             timeout_samples: 10,
             out_of_range_limit: 5,
             bus_error_limit: 10,
+            rail_samples: 100,
         }
     }
 }
@@ -106,6 +115,7 @@ pub struct SensorHealth<T> {
     out_of_range: u16,
     bus_errors: u16,
     bus_errors_total: u32,
+    clipping: u16,
     latched: Option<SensorStatus>,
 }
 
@@ -159,6 +169,14 @@ impl<T: Real> SensorHealth<T> {
                     return (None, SensorStatus::OutOfRange);
                 }
                 self.out_of_range = 0;
+                if x.abs() >= cfg.clip_fraction * cfg.full_scale {
+                    // A railed output repeats legitimately: not "stuck".
+                    self.last = None;
+                    self.same = 0;
+                    self.clipping = self.clipping.saturating_add(1);
+                    return (None, SensorStatus::Clipping);
+                }
+                self.clipping = 0;
                 if self.last == Some(x) {
                     self.same = self.same.saturating_add(1);
                 } else {
@@ -169,9 +187,6 @@ impl<T: Real> SensorHealth<T> {
                 if self.same.saturating_add(1) >= cfg.stuck_samples {
                     return (None, SensorStatus::Stuck);
                 }
-                if x.abs() >= cfg.clip_fraction * cfg.full_scale {
-                    return (None, SensorStatus::Clipping);
-                }
                 (Some(x), SensorStatus::Healthy)
             }
         }
@@ -180,6 +195,17 @@ impl<T: Real> SensorHealth<T> {
     /// Marks the sensor failed by the parity test.
     pub fn isolate(&mut self) {
         self.latched = Some(SensorStatus::ParityIsolated);
+    }
+
+    /// Consecutive clipping samples so far.
+    pub fn clipping_run(&self) -> u16 {
+        self.clipping
+    }
+
+    /// Marks the sensor railed (decided by the monitor, which sees whether
+    /// the other sensors clip too).
+    pub fn rail(&mut self) {
+        self.latched = Some(SensorStatus::Railed);
     }
 
     /// The latched failure, if any.

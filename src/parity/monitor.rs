@@ -159,6 +159,9 @@ pub struct ParityReport<T: Real, const N: usize> {
     pub bias_estimate: T,
     /// Sensor isolated and removed in this period.
     pub isolated: Option<usize>,
+    /// At least half of the sensors still in the set clip this period: a
+    /// common-mode saturation (violent manoeuvre, crash), not a sensor fault.
+    pub common_mode_saturation: bool,
     /// Parity dimension in use.
     pub parity_dim: usize,
 }
@@ -234,6 +237,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             suspect: None,
             bias_estimate: T::zero(),
             isolated: None,
+            common_mode_saturation: false,
             parity_dim: space.dim(),
         };
         Ok(Self {
@@ -299,9 +303,27 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                 newly_failed = Some(k);
             }
         }
+        // Railed outputs: long clipping on a minority of sensors.
+        let in_set = self.removed.iter().filter(|r| !**r).count();
+        let clipping = status
+            .iter()
+            .filter(|s| **s == SensorStatus::Clipping)
+            .count();
+        let common_mode = in_set > 0 && 2 * clipping >= in_set;
+        for (k, (h, st)) in self.health.iter_mut().zip(status.iter_mut()).enumerate() {
+            if !common_mode
+                && h.clipping_run() >= self.cfg.health.rail_samples
+                && h.failure().is_none()
+            {
+                h.rail();
+                *st = SensorStatus::Railed;
+                newly_failed = newly_failed.or(Some(k));
+            }
+        }
         let mut report = self.last;
         report.decision = false;
         report.isolated = None;
+        report.common_mode_saturation = common_mode;
         if let Some(k) = newly_failed {
             self.exclude(k);
         }
