@@ -92,7 +92,14 @@ pub fn run_array<T: Real, const N: usize>(
     let geometry64 =
         Geometry::<f64, N>::new(&spec.directions).map_err(|e| anyhow::anyhow!("{e:?}"))?;
     let sim = ArraySim::new(spec, seed);
-    cfg.train_samples = sim.training_samples().saturating_sub(10).max(1);
+    // Two thirds of the lead-in train, the rest calibrates the thresholds.
+    let lead_in = sim.training_samples().saturating_sub(10).max(3);
+    if cfg.calibrate_samples > 0 {
+        cfg.train_samples = lead_in * 2 / 3;
+        cfg.calibrate_samples = lead_in - cfg.train_samples;
+    } else {
+        cfg.train_samples = lead_in;
+    }
     let mut monitor =
         ParityMonitor::<T, N, WINDOW>::new(&geometry, cfg).map_err(|e| anyhow::anyhow!("{e:?}"))?;
     let gyro = spec.kind == ArrayKind::Gyro;
@@ -150,7 +157,10 @@ pub fn run_array<T: Real, const N: usize>(
             continue;
         }
         if !trained {
-            if report.phase == ParityPhase::Training {
+            if matches!(
+                report.phase,
+                ParityPhase::Training | ParityPhase::Calibrating
+            ) {
                 bail!("{}: training did not finish in the lead-in", spec.name);
             }
             trained = true;

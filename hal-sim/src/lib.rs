@@ -31,6 +31,8 @@ pub mod metrics;
 #[cfg(feature = "std")]
 pub mod ots;
 #[cfg(feature = "std")]
+pub mod parity_replay;
+#[cfg(feature = "std")]
 pub mod replay;
 #[cfg(feature = "std")]
 pub mod runner;

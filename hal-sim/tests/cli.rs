@@ -143,3 +143,91 @@ fn otsukf_prints_the_rmse_table_beside_the_paper() {
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--seeds must be at least 1"));
 }
+
+#[test]
+fn parity_s4_prints_per_seed_detections_and_isolations() {
+    let o = bin().args(["parity", "--seeds", "3"]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        s.contains("isolated to sensor 5 in 3/3 runs; false-alarm events before onset: 0"),
+        "{s}"
+    );
+    let o = bin().args(["parity", "--seeds", "0"]).output().unwrap();
+    assert!(!o.status.success());
+}
+
+#[test]
+fn parity_sweep_prints_one_row_per_method_and_writes_json() {
+    let json = tmp("sweep.json");
+    let o = bin()
+        .args([
+            "parity-sweep",
+            "--array",
+            "cone6",
+            "--kind",
+            "accel",
+            "--runs",
+            "3",
+            "--json",
+        ])
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = String::from_utf8_lossy(&o.stdout);
+    for m in [
+        "paper PCA",
+        "chi2/GLT",
+        "CUSUM",
+        "PX4-like",
+        "ArduPilot-like",
+    ] {
+        assert!(s.contains(m), "{m}: {s}");
+    }
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v.as_array().unwrap().len(), 5);
+}
+
+#[test]
+fn parity_replay_reads_the_real_log_and_rejects_bad_files() {
+    let log = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/ap_log171_3imu.csv"
+    );
+    let o = bin().args(["parity-replay", log]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(s.contains("9521 rows, 3 IMUs"), "{s}");
+    assert!(s.contains("parity alarms: 239.28"), "{s}");
+
+    // One IMU only: a clear error naming the file.
+    let one = tmp("one-imu.csv");
+    std::fs::write(
+        &one,
+        "t,imu0_ax,imu0_ay,imu0_az,imu0_gx,imu0_gy,imu0_gz\n0,0,0,-9.8,0,0,0\n",
+    )
+    .unwrap();
+    let o = bin().arg("parity-replay").arg(&one).output().unwrap();
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("one-imu.csv") && e.contains("at least two IMUs"),
+        "{e}"
+    );
+
+    // A bad number: file and line.
+    let bad = tmp("bad-cell.csv");
+    let mut text = String::from("t,imu0_ax,imu0_ay,imu0_az,imu0_gx,imu0_gy,imu0_gz,imu1_ax,imu1_ay,imu1_az,imu1_gx,imu1_gy,imu1_gz\n");
+    text.push_str("0,0,0,-9.8,0,0,0,0,0,-9.8,0,0,0\n");
+    text.push_str("0.01,0,zero,-9.8,0,0,0,0,0,-9.8,0,0,0\n");
+    std::fs::write(&bad, text).unwrap();
+    let o = bin().arg("parity-replay").arg(&bad).output().unwrap();
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("bad-cell.csv: line 3") && e.contains("'zero' is not a number"),
+        "{e}"
+    );
+}

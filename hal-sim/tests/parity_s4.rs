@@ -253,6 +253,10 @@ fn common_mode_saturation_is_reported_and_fails_no_sensor() {
     }
     let r = last.unwrap();
     assert!(r.common_mode_saturation);
-    assert!(r.status.iter().all(|s| *s == SensorStatus::Clipping), "{:?}", r.status);
+    assert!(
+        r.status.iter().all(|s| *s == SensorStatus::Clipping),
+        "{:?}",
+        r.status
+    );
     assert!(r.fused.is_none());
 }

@@ -39,6 +39,12 @@ pub struct ParityConfig<T> {
     pub window_blocks: usize,
     /// Training samples (fault-free; motion helps the leakage fit).
     pub train_samples: u32,
+    /// Calibration samples after training (fault-free): the tests run with
+    /// their χ²/ARL thresholds and each threshold is raised to 1.25× the
+    /// largest statistic seen, when that is higher. Real sensors are not
+    /// Gaussian and white (vibration bursts, filter differences); this
+    /// keeps the thresholds honest on them. 0 disables.
+    pub calibrate_samples: u32,
     /// False-alarm probability per decision of the GLT and PCA tests.
     pub false_alarm: f64,
     /// Factor on the χ²-derived thresholds: covers the error of a
@@ -77,6 +83,7 @@ impl<T: Real> ParityConfig<T> {
             block_len: block as u16,
             window_blocks: 10,
             train_samples: libm::round(30.0 * rate_hz) as u32,
+            calibrate_samples: libm::round(15.0 * rate_hz) as u32,
             false_alarm: 1e-9,
             threshold_margin: T::lit(1.5),
             cusum_bias: T::lit(0.05 * deg),
@@ -105,6 +112,9 @@ impl<T: Real> ParityConfig<T> {
 pub enum ParityPhase {
     /// Learning offset, leakage and noise; no decisions.
     Training,
+    /// Running the tests fault-free to calibrate their thresholds; no
+    /// alarms.
+    Calibrating,
     /// Testing every block.
     Monitoring,
     /// Three or fewer healthy sensors remain: fusing without monitoring.
@@ -203,6 +213,11 @@ pub struct ParityMonitor<T: Real, const N: usize, const W: usize> {
     cusum_neg: [T; N],
     suspect_run: (Option<usize>, u16),
     removed: [bool; N],
+    /// Threshold factors `[GLT, PCA, CUSUM]` from calibration.
+    scales: [T; 3],
+    /// Largest statistic ÷ threshold seen in calibration, same order.
+    peaks: [T; 3],
+    calibrated: u32,
     last: ParityReport<T, N>,
 }
 
@@ -256,6 +271,9 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             cusum_neg: [T::zero(); N],
             suspect_run: (None, 0),
             removed: [false; N],
+            scales: [T::one(); 3],
+            peaks: [T::zero(); 3],
+            calibrated: 0,
             last: report,
         })
     }
@@ -342,7 +360,10 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             .zip(usable.iter())
             .all(|(a, u)| !a || *u);
         if all_active_usable
-            && matches!(self.phase, ParityPhase::Training | ParityPhase::Monitoring)
+            && matches!(
+                self.phase,
+                ParityPhase::Training | ParityPhase::Calibrating | ParityPhase::Monitoring
+            )
         {
             let p = self.space.parity(&m);
             let x = self.space.fuse(&m);
@@ -370,11 +391,15 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         match self
             .trainer
             .finish()
-            .and_then(|b| derive_tests(&self.space, b, &self.cfg))
+            .and_then(|b| derive_tests(&self.space, b, &self.cfg, &self.scales))
         {
             Some(t) => {
                 self.tests = Some(t);
-                self.phase = ParityPhase::Monitoring;
+                self.phase = if self.cfg.calibrate_samples > 0 {
+                    ParityPhase::Calibrating
+                } else {
+                    ParityPhase::Monitoring
+                };
             }
             // Non-finite training data: train again rather than test with it.
             None => {
@@ -464,6 +489,10 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                 self.filled = 0;
             }
         }
+        if self.phase == ParityPhase::Calibrating {
+            self.calibrate(&t, &b, report);
+            return;
+        }
         let fault = match self.cfg.detector {
             ParityDetector::Pca => report.flags.pca,
             ParityDetector::Glt => report.flags.glt,
@@ -519,6 +548,65 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         }
     }
 
+    /// One calibration decision: records each statistic against its
+    /// threshold, raises no alarm; at the end scales the thresholds.
+    fn calibrate(
+        &mut self,
+        t: &Tests<T, N>,
+        block: &SVector<T, N>,
+        report: &mut ParityReport<T, N>,
+    ) {
+        let ratios = [
+            report.glt / t.glt_threshold,
+            if t.pca_threshold > T::zero() {
+                report.pca / t.pca_threshold
+            } else {
+                T::zero()
+            },
+            report.cusum_ratio,
+        ];
+        for (p, r) in self.peaks.iter_mut().zip(ratios.iter()) {
+            if r.finite() && *r > *p {
+                *p = *r;
+            }
+        }
+        report.flags = DetectorFlags::default();
+        report.fault = false;
+        // Follow drift during calibration too (the offset keeps learning).
+        if self.cfg.drift_blocks > T::one() {
+            let gain = T::one() / self.cfg.drift_blocks;
+            if let Some(tests) = self.tests.as_mut() {
+                tests.baseline.offset += block * gain;
+            }
+        }
+        self.calibrated = self
+            .calibrated
+            .saturating_add(u32::from(self.cfg.block_len));
+        if self.calibrated < self.cfg.calibrate_samples {
+            return;
+        }
+        for (s, p) in self.scales.iter_mut().zip(self.peaks.iter()) {
+            *s = (*p * T::lit(1.25)).max(T::one());
+        }
+        let baseline = self.tests.map(|t| t.baseline);
+        self.tests = baseline.and_then(|b| derive_tests(&self.space, b, &self.cfg, &self.scales));
+        self.phase = if self.tests.is_some() {
+            ParityPhase::Monitoring
+        } else {
+            ParityPhase::Lost
+        };
+        self.filled = 0;
+        self.head = 0;
+        self.cusum_pos = [T::zero(); N];
+        self.cusum_neg = [T::zero(); N];
+    }
+
+    /// Threshold factors `[GLT, PCA, CUSUM]` set by calibration (1 = the
+    /// χ²/ARL thresholds held).
+    pub fn threshold_scales(&self) -> [T; 3] {
+        self.scales
+    }
+
     /// Removes sensor `k` from the set and carries the learned baseline
     /// into the reduced parity space.
     fn exclude(&mut self, k: usize) {
@@ -545,7 +633,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                         block_cov: c * t.baseline.block_cov * c.transpose(),
                         correlation_factor: t.baseline.correlation_factor,
                     };
-                    self.tests = derive_tests(&sub, b, &self.cfg);
+                    self.tests = derive_tests(&sub, b, &self.cfg, &self.scales);
                     if self.tests.is_none() {
                         self.phase = ParityPhase::Lost;
                     }
@@ -577,7 +665,9 @@ fn derive_tests<T: Real, const N: usize>(
     space: &ParitySpace<T, N>,
     baseline: Baseline<T, N>,
     cfg: &ParityConfig<T>,
+    scales: &[T; 3],
 ) -> Option<Tests<T, N>> {
+    let [glt_scale, pca_scale, cusum_scale] = *scales;
     let dim = space.dim();
     if dim == 0 {
         return None;
@@ -609,7 +699,7 @@ fn derive_tests<T: Real, const N: usize>(
     });
     let margin = cfg.threshold_margin;
     let glt_threshold =
-        T::lit(chi_square_upper_quantile(cfg.false_alarm, dim as u32).ok()?) * margin;
+        T::lit(chi_square_upper_quantile(cfg.false_alarm, dim as u32).ok()?) * margin * glt_scale;
     let (values, vectors) = symmetric_eigen(&SMatrix::<T, N, N>::from_fn(|i, j| {
         if i < dim && j < dim {
             at(&baseline.block_cov, i, j)
@@ -626,8 +716,9 @@ fn derive_tests<T: Real, const N: usize>(
             *v = values.get(c).copied().unwrap_or(T::zero());
         }
     }
-    let pca_threshold =
-        T::lit(chi_square_upper_quantile(cfg.false_alarm, pca_dims as u32).ok()?) * margin;
+    let pca_threshold = T::lit(chi_square_upper_quantile(cfg.false_alarm, pca_dims as u32).ok()?)
+        * margin
+        * pca_scale;
     let mut kappa = [T::zero(); N];
     let mut cusum_h = [T::zero(); N];
     for k in 0..N {
@@ -642,7 +733,7 @@ fn derive_tests<T: Real, const N: usize>(
         let shift = (cfg.cusum_bias * qk.sqrt()).to_f64();
         let kappa_k = 0.5 * shift;
         *kk = T::lit(kappa_k);
-        *hk = T::lit(cusum_threshold(kappa_k, cfg.cusum_arl0).ok()?) * margin;
+        *hk = T::lit(cusum_threshold(kappa_k, cfg.cusum_arl0).ok()?) * margin * cusum_scale;
     }
     Some(Tests {
         baseline,

@@ -1,0 +1,366 @@
+//! Replays logs of several synchronous IMUs (SPEC §10 columns
+//! `imu{k}_{ax,ay,az,gx,gy,gz}`) through the parity monitor and the
+//! autopilot baselines, optionally with a bias injected on one IMU channel.
+
+use std::path::Path;
+
+use anyhow::{bail, Context, Result};
+use nalgebra::Matrix3;
+
+use imu_fdi::parity::{Geometry, ParityConfig, ParityMonitor, Reading, SensorStatus};
+
+use crate::array::ArrayKind;
+use crate::baseline::{ArduPilotLike, Px4Like};
+
+const AXES: [&str; 6] = ["ax", "ay", "az", "gx", "gy", "gz"];
+/// Most IMUs a replayed log may carry.
+pub const MAX_IMUS: usize = 3;
+
+/// The IMU rows of a log.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ImuLog {
+    /// Time of each row, s (strictly increasing).
+    pub t: Vec<f64>,
+    /// Per row, per IMU: `[a_x, a_y, a_z, p, q, r]` (NaN where a cell was empty).
+    pub imus: Vec<Vec<[f64; 6]>>,
+    /// Number of IMUs found.
+    pub count: usize,
+    /// Rows skipped because their time did not increase.
+    pub skipped: usize,
+}
+
+/// Reads a SPEC §10 CSV with `imu{k}_…` columns (k = 0, 1, …). Errors name
+/// the file and line; rows with non-increasing `t` are skipped and counted.
+pub fn read_imu_log(path: &Path) -> Result<ImuLog> {
+    let mut rdr = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .with_context(|| format!("cannot read {}", path.display()))?;
+    let headers = rdr.headers()?.clone();
+    let find = |name: &str| headers.iter().position(|h| h == name);
+    let t_col = find("t").with_context(|| format!("{}: no `t` column", path.display()))?;
+    let mut cols: Vec<[usize; 6]> = Vec::new();
+    for k in 0..MAX_IMUS {
+        let idx: Vec<Option<usize>> = AXES.iter().map(|a| find(&format!("imu{k}_{a}"))).collect();
+        match idx.iter().copied().collect::<Option<Vec<usize>>>() {
+            Some(v) => cols.push([v[0], v[1], v[2], v[3], v[4], v[5]]),
+            None if idx.iter().any(Option::is_some) => bail!(
+                "{}: imu{k} has only some of imu{k}_ax … imu{k}_gz",
+                path.display()
+            ),
+            None => break,
+        }
+    }
+    if cols.len() < 2 {
+        bail!(
+            "{}: needs at least two IMUs (imu0_… and imu1_… columns)",
+            path.display()
+        );
+    }
+    let mut log = ImuLog {
+        count: cols.len(),
+        ..ImuLog::default()
+    };
+    for (line, rec) in rdr.records().enumerate() {
+        let rec = rec.with_context(|| format!("{}: line {}", path.display(), line + 2))?;
+        let parse = |i: usize| -> Result<f64> {
+            let cell = rec.get(i).unwrap_or("");
+            if cell.is_empty() {
+                return Ok(f64::NAN);
+            }
+            cell.parse::<f64>().with_context(|| {
+                format!(
+                    "{}: line {}: '{cell}' is not a number",
+                    path.display(),
+                    line + 2
+                )
+            })
+        };
+        let t = parse(t_col)?;
+        if !t.is_finite() || log.t.last().is_some_and(|last| t <= *last) {
+            log.skipped += 1;
+            continue;
+        }
+        let mut row = Vec::with_capacity(cols.len());
+        for c in &cols {
+            let mut v = [0.0; 6];
+            for (slot, i) in v.iter_mut().zip(c.iter()) {
+                *slot = parse(*i)?;
+            }
+            row.push(v);
+        }
+        log.t.push(t);
+        log.imus.push(row);
+    }
+    if log.t.len() < 10 {
+        bail!("{}: fewer than 10 usable rows", path.display());
+    }
+    Ok(log)
+}
+
+/// A bias added to one IMU channel from a time on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Injection {
+    /// IMU index.
+    pub imu: usize,
+    /// Channel 0–5 `[a_x … r]`.
+    pub channel: usize,
+    /// Bias (m/s² or rad/s).
+    pub size: f64,
+    /// Onset, s (log time).
+    pub start: f64,
+}
+
+/// What one replay produced for one sensor kind.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ParityReplay {
+    /// Log time training ended (monitoring began).
+    pub monitoring_from: Option<f64>,
+    /// Threshold factors `[GLT, PCA, CUSUM]` set by calibration.
+    pub threshold_scales: [f64; 3],
+    /// Training's correlation factor (block variance ÷ white-noise value).
+    pub correlation_factor: f64,
+    /// Alarm intervals of the monitor's decision (GLT or CUSUM):
+    /// (start, end, suspect sensor at the start).
+    pub alarms: Vec<(f64, f64, Option<usize>)>,
+    /// Isolations (sensor = 3·imu + axis, time).
+    pub isolations: Vec<(usize, f64)>,
+    /// First time each (sensor, non-healthy status) was seen.
+    pub statuses: Vec<(usize, SensorStatus, f64)>,
+    /// Common-mode saturation intervals (start, end, –).
+    pub saturation: Vec<(f64, f64, Option<usize>)>,
+    /// PX4-like alarm intervals (start, end, IMU blamed).
+    pub px4: Vec<(f64, f64, Option<usize>)>,
+    /// ArduPilot-like alarm intervals.
+    pub ardupilot: Vec<(f64, f64, Option<usize>)>,
+}
+
+fn edge(
+    list: &mut Vec<(f64, f64, Option<usize>)>,
+    on: bool,
+    was: &mut bool,
+    t: f64,
+    who: Option<usize>,
+) {
+    if on && !*was {
+        list.push((t, t, who));
+    }
+    if on {
+        if let Some(last) = list.last_mut() {
+            last.1 = t;
+        }
+    }
+    *was = on;
+}
+
+/// Replays `log` for gyros or accelerometers (three IMUs, board rotation
+/// already applied: aligned triads) from `train_start`, training for
+/// `train_s` seconds, with an optional injected bias.
+pub fn replay_parity(
+    log: &ImuLog,
+    kind: ArrayKind,
+    train_start: f64,
+    train_s: f64,
+    injection: Option<Injection>,
+) -> Result<ParityReplay> {
+    if log.count != 3 {
+        bail!(
+            "the parity replay needs three IMUs, the log has {}",
+            log.count
+        );
+    }
+    let span = log.t.last().copied().unwrap_or(0.0) - log.t.first().copied().unwrap_or(0.0);
+    let rate = (log.t.len().saturating_sub(1)) as f64 / span.max(1e-9);
+    let (offset, fs) = match kind {
+        ArrayKind::Gyro => (3, 2000.0_f64.to_radians()),
+        ArrayKind::Accel => (0, 16.0 * imu_fdi::model::G0),
+    };
+    let mut cfg = match kind {
+        ArrayKind::Gyro => ParityConfig::<f32>::gyro(rate, fs as f32),
+        ArrayKind::Accel => ParityConfig::<f32>::accel(rate, fs as f32),
+    };
+    // Two thirds train, one third calibrates the thresholds.
+    cfg.train_samples = (train_s * rate * 2.0 / 3.0).round() as u32;
+    cfg.calibrate_samples = (train_s * rate / 3.0).round() as u32;
+    let geometry = Geometry::<f32, 9>::triads(&[Matrix3::identity(); 3])
+        .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    let mut monitor =
+        ParityMonitor::<f32, 9, 32>::new(&geometry, cfg).map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    let mut px4 = Px4Like::<3>::new(kind == ArrayKind::Gyro);
+    let mut ap = ArduPilotLike::new(kind == ArrayKind::Gyro);
+    let mut out = ParityReplay::default();
+    let (mut was, mut was_sat, mut was_px4, mut was_ap) = (false, false, false, false);
+    let mut prev_t = None;
+    for (t, row) in log.t.iter().zip(log.imus.iter()) {
+        if *t < train_start {
+            continue;
+        }
+        let value = |imu: usize, axis: usize| -> f64 {
+            let ch = offset + axis;
+            let mut v = row
+                .get(imu)
+                .and_then(|r| r.get(ch))
+                .copied()
+                .unwrap_or(f64::NAN);
+            if let Some(inj) = injection {
+                if inj.imu == imu && inj.channel == ch && *t >= inj.start {
+                    v += inj.size;
+                }
+            }
+            v
+        };
+        let readings: [Reading<f32>; 9] = core::array::from_fn(|i| {
+            let v = value(i / 3, i % 3);
+            if v.is_nan() {
+                Reading::Missing
+            } else {
+                Reading::Sample(v as f32)
+            }
+        });
+        let r = monitor.step(&readings);
+        if out.monitoring_from.is_none() && r.phase == imu_fdi::parity::ParityPhase::Monitoring {
+            out.monitoring_from = Some(*t);
+        }
+        for (k, st) in r.status.iter().enumerate() {
+            if *st != SensorStatus::Healthy
+                && !out.statuses.iter().any(|(j, s, _)| *j == k && s == st)
+            {
+                out.statuses.push((k, *st, *t));
+            }
+        }
+        if let Some(k) = r.isolated {
+            out.isolations.push((k, *t));
+        }
+        if out.monitoring_from.is_some() {
+            edge(&mut out.alarms, r.fault, &mut was, *t, r.suspect);
+        }
+        edge(
+            &mut out.saturation,
+            r.common_mode_saturation,
+            &mut was_sat,
+            *t,
+            None,
+        );
+        // Baselines on the IMU vectors.
+        let units: [[f64; 3]; 3] = core::array::from_fn(|k| core::array::from_fn(|a| value(k, a)));
+        let mean: [f64; 3] =
+            core::array::from_fn(|a| units.iter().map(|u| u[a]).sum::<f64>() / 3.0);
+        let dev: [[f64; 3]; 3] =
+            core::array::from_fn(|k| core::array::from_fn(|a| units[k][a] - mean[a]));
+        let diff: Vec<[f64; 3]> = units
+            .iter()
+            .map(|u| core::array::from_fn(|a| u[a] - units[0][a]))
+            .collect();
+        let dt = prev_t.map_or(1.0 / rate, |p| t - p);
+        prev_t = Some(*t);
+        let blame = px4.step(&dev, dt);
+        edge(&mut out.px4, blame.is_some(), &mut was_px4, *t, blame);
+        let alarm = ap.step(&diff, *t);
+        edge(&mut out.ardupilot, alarm, &mut was_ap, *t, None);
+    }
+    out.threshold_scales = monitor.threshold_scales().map(f64::from);
+    out.correlation_factor = monitor
+        .baseline()
+        .map_or(1.0, |b| f64::from(b.correlation_factor));
+    Ok(out)
+}
+
+/// Seconds after onset within which an injected bias counts as detected.
+pub const DETECT_WITHIN_S: f64 = 15.0;
+
+/// Smallest injected bias detected on one channel, per method.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InjectionResult {
+    /// IMU index.
+    pub imu: usize,
+    /// Axis 0–2 of the swept kind.
+    pub axis: usize,
+    /// Onset, s.
+    pub onset: f64,
+    /// Parity monitor: (size, delay s, isolated to the right sensor).
+    pub parity: Option<(f64, f64, bool)>,
+    /// PX4-like: (size, delay s).
+    pub px4: Option<(f64, f64)>,
+    /// ArduPilot-like: (size, delay s).
+    pub ardupilot: Option<(f64, f64)>,
+}
+
+/// For every IMU channel of `kind` and each onset, the smallest of `sizes`
+/// (ascending) that each method flags within [`DETECT_WITHIN_S`] with no
+/// alarm between monitoring start and onset.
+pub fn injection_sweep(
+    log: &ImuLog,
+    kind: ArrayKind,
+    train_start: f64,
+    train_s: f64,
+    onsets: &[f64],
+    sizes: &[f64],
+) -> Result<Vec<InjectionResult>> {
+    let channel0 = match kind {
+        ArrayKind::Gyro => 3,
+        ArrayKind::Accel => 0,
+    };
+    let mut out = Vec::new();
+    for imu in 0..3 {
+        for axis in 0..3 {
+            for &onset in onsets {
+                let mut res = InjectionResult {
+                    imu,
+                    axis,
+                    onset,
+                    parity: None,
+                    px4: None,
+                    ardupilot: None,
+                };
+                for &size in sizes {
+                    let inj = Injection {
+                        imu,
+                        channel: channel0 + axis,
+                        size,
+                        start: onset,
+                    };
+                    let r = replay_parity(log, kind, train_start, train_s, Some(inj))?;
+                    let first = |list: &[(f64, f64, Option<usize>)]| {
+                        if list.iter().any(|a| a.0 < onset) {
+                            return None;
+                        }
+                        list.iter()
+                            .find(|a| a.0 < onset + DETECT_WITHIN_S)
+                            .map(|a| a.0 - onset)
+                    };
+                    if res.parity.is_none() {
+                        if let Some(d) = first(&r.alarms) {
+                            let ok = r.isolations.first().is_some_and(|(k, t)| {
+                                *k == 3 * imu + axis && *t < onset + DETECT_WITHIN_S
+                            });
+                            res.parity = Some((size, d, ok));
+                        }
+                    }
+                    if res.px4.is_none() {
+                        res.px4 = first(&r.px4).map(|d| (size, d));
+                    }
+                    if res.ardupilot.is_none() {
+                        res.ardupilot = first(&r.ardupilot).map(|d| (size, d));
+                    }
+                    if res.parity.is_some() && res.px4.is_some() && res.ardupilot.is_some() {
+                        break;
+                    }
+                }
+                out.push(res);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Bias grid for [`injection_sweep`]: gyro 0.5–30 °/s (rad/s), accel
+/// 0.05–5 m/s².
+pub fn injection_sizes(kind: ArrayKind) -> Vec<f64> {
+    match kind {
+        ArrayKind::Gyro => [0.5, 1.0, 1.5, 2.0, 3.0, 5.0, 7.0, 10.0, 15.0, 20.0, 30.0]
+            .iter()
+            .map(|d: &f64| d.to_radians())
+            .collect(),
+        ArrayKind::Accel => vec![0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 5.0],
+    }
+}
