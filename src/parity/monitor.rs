@@ -218,6 +218,10 @@ pub struct ParityMonitor<T: Real, const N: usize, const W: usize> {
     /// Largest statistic ÷ threshold seen in calibration, same order.
     peaks: [T; 3],
     calibrated: u32,
+    /// χ² quantiles at `false_alarm` by degrees of freedom (index), computed
+    /// once at configuration: reconfiguring in flight then costs no
+    /// software-`f64` root finding.
+    chi2: [T; N],
     last: ParityReport<T, N>,
 }
 
@@ -236,6 +240,12 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             return Err(ConfigError::Probability);
         }
         let space = ParitySpace::new(geometry, &[true; N])?;
+        let mut chi2 = [T::zero(); N];
+        for (dof, q) in chi2.iter_mut().enumerate().skip(1) {
+            let x = chi_square_upper_quantile(cfg.false_alarm, dof as u32)
+                .map_err(|_| ConfigError::Probability)?;
+            *q = T::lit(x);
+        }
         let report = ParityReport {
             phase: ParityPhase::Training,
             fused: None,
@@ -274,6 +284,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             scales: [T::one(); 3],
             peaks: [T::zero(); 3],
             calibrated: 0,
+            chi2,
             last: report,
         })
     }
@@ -391,7 +402,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         match self
             .trainer
             .finish()
-            .and_then(|b| derive_tests(&self.space, b, &self.cfg, &self.scales))
+            .and_then(|b| derive_tests(&self.space, b, &self.cfg, &self.scales, &self.chi2))
         {
             Some(t) => {
                 self.tests = Some(t);
@@ -589,7 +600,8 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             *s = (*p * T::lit(1.25)).max(T::one());
         }
         let baseline = self.tests.map(|t| t.baseline);
-        self.tests = baseline.and_then(|b| derive_tests(&self.space, b, &self.cfg, &self.scales));
+        self.tests = baseline
+            .and_then(|b| derive_tests(&self.space, b, &self.cfg, &self.scales, &self.chi2));
         self.phase = if self.tests.is_some() {
             ParityPhase::Monitoring
         } else {
@@ -633,7 +645,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                         block_cov: c * t.baseline.block_cov * c.transpose(),
                         correlation_factor: t.baseline.correlation_factor,
                     };
-                    self.tests = derive_tests(&sub, b, &self.cfg, &self.scales);
+                    self.tests = derive_tests(&sub, b, &self.cfg, &self.scales, &self.chi2);
                     if self.tests.is_none() {
                         self.phase = ParityPhase::Lost;
                     }
@@ -666,6 +678,7 @@ fn derive_tests<T: Real, const N: usize>(
     baseline: Baseline<T, N>,
     cfg: &ParityConfig<T>,
     scales: &[T; 3],
+    chi2: &[T; N],
 ) -> Option<Tests<T, N>> {
     let [glt_scale, pca_scale, cusum_scale] = *scales;
     let dim = space.dim();
@@ -698,8 +711,7 @@ fn derive_tests<T: Real, const N: usize>(
         }
     });
     let margin = cfg.threshold_margin;
-    let glt_threshold =
-        T::lit(chi_square_upper_quantile(cfg.false_alarm, dim as u32).ok()?) * margin * glt_scale;
+    let glt_threshold = *chi2.get(dim)? * margin * glt_scale;
     let (values, vectors) = symmetric_eigen(&SMatrix::<T, N, N>::from_fn(|i, j| {
         if i < dim && j < dim {
             at(&baseline.block_cov, i, j)
@@ -716,9 +728,7 @@ fn derive_tests<T: Real, const N: usize>(
             *v = values.get(c).copied().unwrap_or(T::zero());
         }
     }
-    let pca_threshold = T::lit(chi_square_upper_quantile(cfg.false_alarm, pca_dims as u32).ok()?)
-        * margin
-        * pca_scale;
+    let pca_threshold = *chi2.get(pca_dims)? * margin * pca_scale;
     let mut kappa = [T::zero(); N];
     let mut cusum_h = [T::zero(); N];
     for k in 0..N {

@@ -79,29 +79,30 @@ pub fn cusum_run_length(mu: f64, kappa: f64, h: f64) -> f64 {
 
 /// CUSUM threshold `h` whose in-control run length (μ = 0) is `arl0`
 /// decisions, for reference value `κ > 0`.
+///
+/// Siegmund's ARL0 is `(eʸ − y − 1)/(2κ²)` with `y = 2κ(h + 1.166)`, so
+/// `y` solves the convex `eʸ − y − 1 = 2κ²·ARL0`. Newton's method from
+/// the upper bound `ln(1 + c) + 1` decreases monotonically onto the root in
+/// a handful of steps (a few `exp` calls: cheap enough to rederive the
+/// thresholds when the sensor set changes in flight).
 pub fn cusum_threshold(kappa: f64, arl0: f64) -> Result<f64, StatsError> {
     if kappa.is_nan() || kappa <= 0.0 || arl0.is_nan() || arl0 <= 1.0 {
         return Err(StatsError::Probability);
     }
-    let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
-    while cusum_run_length(0.0, kappa, hi) < arl0 {
-        hi *= 2.0;
-        if hi > 1e6 {
-            return Err(StatsError::Probability);
-        }
+    let c = 2.0 * kappa * kappa * arl0;
+    if !c.is_finite() {
+        return Err(StatsError::Probability);
     }
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if cusum_run_length(0.0, kappa, mid) < arl0 {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-        if hi - lo <= 1e-10 * hi {
+    let mut y = libm::log1p(c) + 1.0;
+    for _ in 0..60 {
+        let e = libm::exp(y);
+        let step = (e - y - 1.0 - c) / (e - 1.0);
+        y -= step;
+        if step.abs() <= 1e-12 * y {
             break;
         }
     }
-    Ok(hi)
+    Ok((y / (2.0 * kappa) - 1.166).max(0.0))
 }
 
 #[cfg(test)]
@@ -133,7 +134,12 @@ mod tests {
     #[test]
     fn cusum_threshold_inverts_the_run_length() {
         let h = cusum_threshold(0.5, 1e5).unwrap();
-        assert!((cusum_run_length(0.0, 0.5, h) / 1e5 - 1.0).abs() < 1e-6);
+        assert!((cusum_run_length(0.0, 0.5, h) / 1e5 - 1.0).abs() < 1e-9);
+        for (kappa, arl0) in [(0.01, 1e9), (0.3, 50.0), (3.0, 1e12), (0.05, 2.0)] {
+            let h = cusum_threshold(kappa, arl0).unwrap();
+            let arl = cusum_run_length(0.0, kappa, h);
+            assert!((arl / arl0 - 1.0).abs() < 1e-9 || h == 0.0, "{kappa} {arl0}: {arl}");
+        }
         // Montgomery's table: κ = 0.5, h = 5 gives ARL0 ≈ 930 (Siegmund 938).
         assert!((cusum_run_length(0.0, 0.5, 5.0) - 938.0).abs() < 10.0);
         // ...and a 1σ shift is caught in ≈ 10 decisions.
