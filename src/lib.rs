@@ -24,10 +24,17 @@
 //! assert_eq!(report.phase, Phase::Converging);
 //! ```
 //!
+//! For two or more redundant IMUs (or any array of single-axis sensors),
+//! [`parity::ParityMonitor`] tests the parity space of the array: motion-free
+//! residuals, the \[PAR\] PCA pattern, χ² and CUSUM tests, isolation of the
+//! faulty sensor, reconfiguration, hardware health checks and the fused
+//! rate or specific force.
+//!
 //! Crate layout: [`math`] (scalar trait, trig, Cholesky), [`model`] (vehicle
 //! dynamics, measurement models, process noise), [`filter`] (UKF),
 //! [`detect`] (windows, t-test, decoupling, GLR, estimators), [`stats`]
-//! (Student-t quantile), [`monitor`] (the composed periodic monitor).
+//! (Student-t, normal, χ² quantiles, CUSUM thresholds), [`monitor`] (the
+//! composed periodic monitors), [`parity`] (redundant sensors).
 //!
 //! Safety: `unsafe_code` is denied crate-wide; the one exception is the
 //! two-instruction naked function behind [`math::sqrt_f32`] that issues the

@@ -138,7 +138,10 @@ mod tests {
         for (kappa, arl0) in [(0.01, 1e9), (0.3, 50.0), (3.0, 1e12), (0.05, 2.0)] {
             let h = cusum_threshold(kappa, arl0).unwrap();
             let arl = cusum_run_length(0.0, kappa, h);
-            assert!((arl / arl0 - 1.0).abs() < 1e-9 || h == 0.0, "{kappa} {arl0}: {arl}");
+            assert!(
+                (arl / arl0 - 1.0).abs() < 1e-9 || h == 0.0,
+                "{kappa} {arl0}: {arl}"
+            );
         }
         // Montgomery's table: κ = 0.5, h = 5 gives ARL0 ≈ 930 (Siegmund 938).
         assert!((cusum_run_length(0.0, 0.5, 5.0) - 938.0).abs() < 10.0);

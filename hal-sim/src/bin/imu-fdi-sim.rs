@@ -97,7 +97,7 @@ struct DetectOpts {
 
 #[derive(Clone, Copy, ValueEnum)]
 enum ArrayArg {
-    /// Six single-axis sensors on the [PAR] cone.
+    /// Six single-axis sensors on the parity paper's cone.
     Cone6,
     /// Two IMUs, the second yawed 180° (detect only: axes parallel).
     Triads2,
@@ -113,7 +113,7 @@ enum KindArg {
 
 #[derive(Subcommand)]
 enum Cmd {
-    /// S4 ([PAR]): 0.5 °/s bias on sensor 5 of a manoeuvring cone6 gyro
+    /// S4 (parity paper): 0.5 °/s bias on sensor 5 of a manoeuvring cone6 gyro
     /// array; parity monitor (PCA, χ², CUSUM) beside the PX4-like and
     /// ArduPilot-like baselines, over several seeds.
     Parity {
