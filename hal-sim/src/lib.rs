@@ -27,6 +27,8 @@ pub mod array_run;
 #[cfg(feature = "std")]
 pub mod array_sweep;
 #[cfg(feature = "std")]
+pub mod campaign;
+#[cfg(feature = "std")]
 pub mod metrics;
 #[cfg(feature = "std")]
 pub mod ots;
@@ -36,6 +38,8 @@ pub mod parity_replay;
 pub mod replay;
 #[cfg(feature = "std")]
 pub mod runner;
+#[cfg(feature = "std")]
+pub mod stats_ci;
 
 pub use fault::{FaultKind, FaultRow, FaultSizes};
 pub use imu_model::{ImuErrors, SimImu, TriadErrors};

@@ -231,3 +231,71 @@ fn parity_replay_reads_the_real_log_and_rejects_bad_files() {
         "{e}"
     );
 }
+
+#[test]
+fn campaign_shards_merge_to_the_same_table_and_bad_input_is_named() {
+    let (full, a, b) = (tmp("full.csv"), tmp("shard1.csv"), tmp("shard2.csv"));
+    let (fj, mj) = (tmp("full.json"), tmp("merged.json"));
+    let run = |args: &[&str], extra: &[&std::path::Path]| {
+        let mut c = bin();
+        c.args(args);
+        for p in extra {
+            c.arg(p);
+        }
+        let o = c.output().unwrap();
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        String::from_utf8_lossy(&o.stdout).to_string()
+    };
+    let s = run(
+        &["campaign", "s2", "--runs", "12", "--seed", "5", "--json"],
+        &[&fj],
+    );
+    assert!(s.contains("12 runs (indices 0..=11)"), "{s}");
+    assert!(s.contains("detection rate (runs)"), "{s}");
+    run(
+        &["campaign", "s2", "--runs", "12", "--seed", "5", "--csv"],
+        &[&full],
+    );
+    run(
+        &[
+            "campaign", "s2", "--runs", "12", "--seed", "5", "--shard", "1/2", "--csv",
+        ],
+        &[&a],
+    );
+    run(
+        &[
+            "campaign", "s2", "--runs", "12", "--seed", "5", "--shard", "2/2", "--csv",
+        ],
+        &[&b],
+    );
+    let m = run(&["merge", "--json"], &[&mj, &a, &b]);
+    assert!(m.contains("merged 2 files: 12 runs"), "{m}");
+    assert_eq!(
+        std::fs::read_to_string(&fj).unwrap(),
+        std::fs::read_to_string(&mj).unwrap()
+    );
+
+    // Bad shard, duplicate shard, broken row: clear messages, no panic.
+    let o = bin()
+        .args(["campaign", "s2", "--runs", "4", "--shard", "3/2"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("need 1 <= i <= n"));
+    let o = bin().arg("merge").arg(&a).arg(&a).output().unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("appears in more than one shard"));
+    let broken = tmp("broken.csv");
+    let text = std::fs::read_to_string(&a)
+        .unwrap()
+        .replacen(",1,", ",x,", 1);
+    std::fs::write(&broken, text).unwrap();
+    let o = bin().arg("merge").arg(&broken).output().unwrap();
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("broken.csv: line"), "{e}");
+}
