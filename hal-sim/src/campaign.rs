@@ -76,7 +76,7 @@ pub fn campaign_scenario(base: &Scenario, seed: u64, index: u64) -> (Scenario, u
     let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
     let factor = libm::exp(rng.random_range(libm::log(0.5)..libm::log(2.0)));
     let latest = (base.duration_s - 15.0).max(16.0);
-    let onset = rng.random_range(15.0..latest.min(45.0).max(15.5));
+    let onset = rng.random_range(15.0..latest.clamp(15.5, 45.0));
     let length = rng.random_range(5.0..10.0);
     for s in scn.sizes.accel.iter_mut().chain(scn.sizes.gyro.iter_mut()) {
         *s *= factor;
