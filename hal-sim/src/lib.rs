@@ -39,6 +39,8 @@ pub mod replay;
 #[cfg(feature = "std")]
 pub mod runner;
 #[cfg(feature = "std")]
+pub mod scenario_file;
+#[cfg(feature = "std")]
 pub mod stats_ci;
 
 pub use fault::{FaultKind, FaultRow, FaultSizes};

@@ -323,12 +323,7 @@ fn campaign(scn: &Scenario, first: u64, seeds: u64, opts: &RunOptions) -> Result
 }
 
 fn scenario(name: &str) -> Result<Scenario> {
-    Scenario::builtin(name).ok_or_else(|| {
-        anyhow!(
-            "unknown scenario '{name}'; built-ins: {}",
-            Scenario::BUILTIN.join(", ")
-        )
-    })
+    hal_sim::scenario_file::load_scenario(name)
 }
 
 fn print_run(
