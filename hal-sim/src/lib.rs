@@ -35,6 +35,8 @@ pub mod ots;
 #[cfg(feature = "std")]
 pub mod parity_replay;
 #[cfg(feature = "std")]
+pub mod plot;
+#[cfg(feature = "std")]
 pub mod replay;
 #[cfg(feature = "std")]
 pub mod runner;

@@ -12,7 +12,8 @@ use crate::scenario::Scenario;
 /// Reads a scenario file; errors name the file and, for syntax or field
 /// errors, the line and column.
 pub fn read_scenario(path: &Path) -> Result<Scenario> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     parse_scenario(&text).with_context(|| format!("{}: not a valid scenario file", path.display()))
 }
 
@@ -22,7 +23,9 @@ pub fn parse_scenario(text: &str) -> Result<Scenario> {
     if !(scn.duration_s > 0.0 && scn.imu_rate_hz > 0.0) {
         anyhow::bail!("duration_s and imu_rate_hz must be positive");
     }
-    if let Some(r) = scn.faults.iter().find(|r| r.channel > 5 || !(r.end > r.start)) {
+    if let Some(r) = scn.faults.iter().find(|r| {
+        r.channel > 5 || r.end.partial_cmp(&r.start) != Some(core::cmp::Ordering::Greater)
+    }) {
         anyhow::bail!(
             "fault row on channel {} from {} to {} s: channel must be 0–5 and end > start",
             r.channel,

@@ -299,3 +299,42 @@ fn campaign_shards_merge_to_the_same_table_and_bad_input_is_named() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(e.contains("broken.csv: line"), "{e}");
 }
+
+#[test]
+fn plot_writes_png_and_svg_for_a_ukf_scenario_and_for_s4() {
+    let dir = tmp("plots");
+    let o = bin()
+        .args(["plot", "s2", "--seed", "2", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(s.contains("wrote 8 files"), "{s}");
+    for tag in ["faults_flags", "estimates", "innovations", "statistic"] {
+        for ext in ["png", "svg"] {
+            let f = dir.join(format!("s2_seed2_{tag}.{ext}"));
+            let bytes = std::fs::read(&f).unwrap();
+            assert!(bytes.len() > 10_000, "{}", f.display());
+            if ext == "png" {
+                assert_eq!(&bytes[1..4], b"PNG");
+            } else {
+                assert!(String::from_utf8_lossy(&bytes).contains("<svg"));
+            }
+        }
+    }
+    let o = bin()
+        .args(["plot", "s4", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(dir.join("s4_seed1_parity.png").exists());
+    let o = bin()
+        .args(["plot", "nope", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown scenario 'nope'"));
+}

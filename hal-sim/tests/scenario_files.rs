@@ -19,7 +19,10 @@ fn every_builtin_ships_as_an_identical_toml_file() {
             std::fs::write(path(name), scenario_toml(&scn).unwrap()).unwrap();
         }
         let file = read_scenario(&path(name)).unwrap();
-        assert_eq!(file, scn, "{name}: scenarios/{name}.toml differs from the built-in");
+        assert_eq!(
+            file, scn,
+            "{name}: scenarios/{name}.toml differs from the built-in"
+        );
     }
 }
 
@@ -31,5 +34,8 @@ fn bad_scenario_files_get_clear_errors() {
     let e = parse_scenario(&s2.replacen("channel = 0", "channel = 9", 1)).unwrap_err();
     assert!(format!("{e:#}").contains("channel must be 0–5"), "{e:#}");
     let e = parse_scenario("profile = \"boat\"").unwrap_err();
-    assert!(format!("{e:#}").contains("boat") || format!("{e:#}").contains("missing"), "{e:#}");
+    assert!(
+        format!("{e:#}").contains("boat") || format!("{e:#}").contains("missing"),
+        "{e:#}"
+    );
 }

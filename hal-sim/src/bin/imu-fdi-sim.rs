@@ -146,6 +146,23 @@ enum Cmd {
         #[command(flatten)]
         detect: DetectOpts,
     },
+    /// The papers' figures of one run as PNG and SVG: injected fault vs flag,
+    /// estimate vs truth, innovations ±3σ, statistic vs threshold (UKF
+    /// scenarios), or the parity pattern and χ² (s4).
+    Plot {
+        name: String,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        #[arg(long, default_value = "plots")]
+        out: PathBuf,
+        #[command(flatten)]
+        detect: DetectOpts,
+    },
+    /// The README gallery: S1–S4 figures (seed 1) as PNG and SVG.
+    Gallery {
+        #[arg(long, default_value = "docs/gallery")]
+        out: PathBuf,
+    },
     /// Merges the per-run CSVs of campaign shards into one table.
     Merge {
         #[arg(required = true)]
@@ -493,6 +510,44 @@ fn parity_replay_cmd(
     Ok(())
 }
 
+fn plot_scenario(
+    name: &str,
+    seed: u64,
+    out: &std::path::Path,
+    opts: &RunOptions,
+    only: Option<&[hal_sim::plot::TraceFigure]>,
+) -> Result<Vec<PathBuf>> {
+    use hal_sim::plot::{plot_parity, plot_trace, TraceFigure as F};
+    if name.eq_ignore_ascii_case("s4") {
+        return plot_parity(
+            &hal_sim::array::ArraySpec::s4(),
+            seed,
+            &out.join(format!("s4_seed{seed}_parity")),
+        );
+    }
+    let scn = scenario(name)?;
+    let trace =
+        run::<f32>(&scn, seed, opts).map_err(|e| anyhow!("monitor configuration: {e:?}"))?;
+    let all = [
+        F::FaultsAndFlags,
+        F::Estimates,
+        F::Innovations,
+        F::Statistic,
+    ];
+    let mut files = Vec::new();
+    for fig in only.unwrap_or(&all) {
+        let tag = match fig {
+            F::FaultsAndFlags => "faults_flags",
+            F::Estimates => "estimates",
+            F::Innovations => "innovations",
+            F::Statistic => "statistic",
+        };
+        let stem = out.join(format!("{}_seed{seed}_{tag}", scn.name.as_str()));
+        files.extend(plot_trace(&trace, *fig, &stem)?);
+    }
+    Ok(files)
+}
+
 fn finish_campaign(
     rows: &[hal_sim::campaign::CampaignRow],
     summary: &hal_sim::campaign::CampaignSummary,
@@ -575,6 +630,44 @@ fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.cmd {
         Cmd::Parity { first_seed, seeds } => parity_s4(first_seed, seeds)?,
+        Cmd::Plot {
+            name,
+            seed,
+            out,
+            detect,
+        } => {
+            std::fs::create_dir_all(&out)?;
+            let files = plot_scenario(&name, seed, &out, &options(&name, &detect), None)?;
+            out!("wrote {} files to {}:", files.len(), out.display());
+            for f in files {
+                out!("  {}", f.display());
+            }
+        }
+        Cmd::Gallery { out } => {
+            use hal_sim::plot::TraceFigure as F;
+            std::fs::create_dir_all(&out)?;
+            let mut files = Vec::new();
+            for (name, figs) in [
+                ("s1", vec![F::FaultsAndFlags, F::Statistic]),
+                ("s2", vec![F::FaultsAndFlags, F::Estimates, F::Innovations]),
+                ("s3", vec![F::Estimates]),
+            ] {
+                let opts = options(
+                    name,
+                    &DetectOpts {
+                        detector: None,
+                        statistic: StatisticArg::Normalized,
+                        alpha: 1e-6,
+                    },
+                );
+                files.extend(plot_scenario(name, 1, &out, &opts, Some(&figs))?);
+            }
+            files.extend(plot_scenario("s4", 1, &out, &RunOptions::default(), None)?);
+            out!("gallery: wrote {} files to {}", files.len(), out.display());
+            for f in files {
+                out!("  {}", f.display());
+            }
+        }
         Cmd::Campaign {
             name,
             runs,
