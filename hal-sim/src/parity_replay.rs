@@ -364,3 +364,103 @@ pub fn injection_sizes(kind: ArrayKind) -> Vec<f64> {
         ArrayKind::Accel => vec![0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 5.0],
     }
 }
+
+/// Reads the IMU instances of an ArduPilot DataFlash `.bin` log (messages
+/// `IMU`, `IMU2`, `IMU3`, or `IMU` with an instance field `I`), with the
+/// `ardupilot-binlog` parser. Rows are the timestamps at which every
+/// instance logged a sample (ArduPilot logs them synchronously). A log that
+/// ends mid-message (truncated, or power lost) is read up to that point;
+/// the number of such errors is returned in [`ImuLog::skipped`].
+pub fn read_dataflash(path: &Path) -> Result<ImuLog> {
+    use std::collections::BTreeMap;
+    let file = ardupilot_binlog::File::open(path)
+        .with_context(|| format!("cannot read {}", path.display()))?;
+    let entries = file
+        .entries()
+        .with_context(|| format!("{}: not a DataFlash log", path.display()))?;
+    let mut by_time: BTreeMap<u64, [Option<[f64; 6]>; MAX_IMUS]> = BTreeMap::new();
+    let mut errors = 0usize;
+    let mut instances = 0usize;
+    for e in entries {
+        let e = match e {
+            Ok(e) => e,
+            Err(_) => {
+                // A corrupt or truncated tail: keep what was read.
+                errors += 1;
+                break;
+            }
+        };
+        let inst = match e.name.as_str() {
+            "IMU" => e.get_u64("I").map_or(0, |i| i as usize),
+            "IMU2" => 1,
+            "IMU3" => 2,
+            _ => continue,
+        };
+        if inst >= MAX_IMUS {
+            continue;
+        }
+        let t_us = e
+            .get_u64("TimeUS")
+            .or_else(|| e.get_u64("TimeMS").map(|ms| ms * 1000))
+            .or(e.timestamp_usec);
+        let Some(t_us) = t_us else { continue };
+        let v = |k: &str| e.get_f64(k).unwrap_or(f64::NAN);
+        let sample = [
+            v("AccX"),
+            v("AccY"),
+            v("AccZ"),
+            v("GyrX"),
+            v("GyrY"),
+            v("GyrZ"),
+        ];
+        instances = instances.max(inst + 1);
+        if let Some(slot) = by_time.entry(t_us).or_default().get_mut(inst) {
+            *slot = Some(sample);
+        }
+    }
+    if instances < 2 {
+        bail!(
+            "{}: fewer than two IMU instances (IMU, IMU2, IMU3) in the log",
+            path.display()
+        );
+    }
+    let mut log = ImuLog {
+        count: instances,
+        skipped: errors,
+        ..ImuLog::default()
+    };
+    for (t_us, row) in by_time {
+        let Some(all) = row
+            .iter()
+            .take(instances)
+            .copied()
+            .collect::<Option<Vec<_>>>()
+        else {
+            continue;
+        };
+        log.t.push(t_us as f64 * 1e-6);
+        log.imus.push(all);
+    }
+    if log.t.len() < 10 {
+        bail!("{}: fewer than 10 synchronous IMU rows", path.display());
+    }
+    Ok(log)
+}
+
+/// Reads a multi-IMU log by its extension: `.csv` (SPEC §10 columns) or
+/// `.bin` (ArduPilot DataFlash). Anything else is an error naming the file.
+pub fn read_any_imu_log(path: &Path) -> Result<ImuLog> {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("csv") => read_imu_log(path),
+        Some("bin") => read_dataflash(path),
+        _ => bail!(
+            "{}: unknown file type (expected .csv in the SPEC §10 format or an ArduPilot DataFlash .bin)",
+            path.display()
+        ),
+    }
+}

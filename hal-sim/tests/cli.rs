@@ -14,6 +14,16 @@ fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_imu-fdi-sim"))
 }
 
+fn bin_cmd_output(args: &[&str]) -> String {
+    let o = bin().args(args).output().unwrap();
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).to_string()
+}
+
 fn tmp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("imu-fdi-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -200,6 +210,20 @@ fn parity_replay_reads_the_real_log_and_rejects_bad_files() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let s = String::from_utf8_lossy(&o.stdout);
     assert!(s.contains("9521 rows, 3 IMUs"), "{s}");
+    // The DataFlash excerpt directly.
+    let df = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/ap_log171_head.bin"
+    );
+    let o = bin_cmd_output(&[
+        "parity-replay",
+        df,
+        "--train-start",
+        "62",
+        "--train-s",
+        "20",
+    ]);
+    assert!(o.contains("3526 rows, 3 IMUs, t = 11.46..84.84 s"), "{o}");
     assert!(s.contains("parity alarms: 239.28"), "{s}");
 
     // One IMU only: a clear error naming the file.

@@ -173,7 +173,8 @@ enum Cmd {
         json: Option<PathBuf>,
     },
     /// Replays a log of three synchronous IMUs (SPEC §10 `imu{k}_…` columns,
-    /// e.g. tests/data/ap_log171_3imu.csv) through the parity monitor and the
+    /// e.g. tests/data/ap_log171_3imu.csv, or an ArduPilot DataFlash .bin
+    /// with IMU/IMU2/IMU3) through the parity monitor and the
     /// baselines: alarms, isolations, statuses; optionally the smallest
     /// injected bias each method detects per channel.
     ParityReplay {
@@ -401,10 +402,12 @@ fn parity_replay_cmd(
     inject_at: &[f64],
 ) -> Result<()> {
     use hal_sim::array::ArrayKind;
-    use hal_sim::parity_replay::{injection_sizes, injection_sweep, read_imu_log, replay_parity};
-    let log = read_imu_log(input)?;
+    use hal_sim::parity_replay::{
+        injection_sizes, injection_sweep, read_any_imu_log, replay_parity,
+    };
+    let log = read_any_imu_log(input)?;
     out!(
-        "{}: {} rows, {} IMUs, t = {:.2}..{:.2} s, {} rows skipped (time not increasing)",
+        "{}: {} rows, {} IMUs, t = {:.2}..{:.2} s, {} rows skipped (time not increasing, or unreadable tail)",
         input.display(),
         log.t.len(),
         log.count,
