@@ -362,3 +362,55 @@ fn plot_writes_png_and_svg_for_a_ukf_scenario_and_for_s4() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown scenario 'nope'"));
 }
+
+#[test]
+fn px4_ulog_converts_and_replays_from_the_cli() {
+    let ulg = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/px4_fmuv3_outdoor_flight.ulg"
+    );
+    let out = tmp("fmuv3.csv");
+    let o = bin()
+        .args(["convert", ulg, "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        s.contains("341 IMU rows") && s.contains("175 rows with GNSS velocity"),
+        "{s}"
+    );
+    let header = std::fs::read_to_string(&out).unwrap();
+    assert!(header.starts_with("t,imu0_ax,imu0_ay,imu0_az,imu0_gx,imu0_gy,imu0_gz,gnss_vn"));
+    let o = bin().args(["replay", ulg]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        s.contains("replayed 341 rows") && s.contains("aiding GnssAttitude"),
+        "{s}"
+    );
+    // Not a ULog: named, no panic.
+    let o = bin()
+        .args(["convert", "flight.txt", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("flight.txt: unknown file type"));
+    let fake = tmp("fake.ulg");
+    std::fs::write(&fake, b"ULog? no").unwrap();
+    let o = bin()
+        .arg("convert")
+        .arg(&fake)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("fake.ulg"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}

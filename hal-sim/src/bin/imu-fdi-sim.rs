@@ -163,6 +163,14 @@ enum Cmd {
         #[arg(long, default_value = "docs/gallery")]
         out: PathBuf,
     },
+    /// Converts a PX4 ULog (.ulg) to the SPEC §10 replay CSV: primary IMU
+    /// (sensor_combined), GNSS velocity (3-D fix), attitude (quaternion ->
+    /// Euler). `replay` accepts .ulg directly through the same conversion.
+    Convert {
+        input: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Merges the per-run CSVs of campaign shards into one table.
     Merge {
         #[arg(required = true)]
@@ -633,6 +641,29 @@ fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.cmd {
         Cmd::Parity { first_seed, seeds } => parity_s4(first_seed, seeds)?,
+        Cmd::Convert { input, out } => {
+            if !input
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("ulg"))
+            {
+                return Err(anyhow!(
+                    "{}: unknown file type for convert (expected a PX4 .ulg)",
+                    input.display()
+                ));
+            }
+            let c = hal_sim::log_import::ulog_to_replay_csv(&input, &out)?;
+            out!(
+                "converted {}: {} IMU rows, t = {:.2}..{:.2} s ({:.1} Hz), {} rows with GNSS velocity, {} with attitude",
+                input.display(),
+                c.rows,
+                c.span.0,
+                c.span.1,
+                c.imu_rate_hz,
+                c.gnss_rows,
+                c.att_rows
+            );
+            out!("wrote {}", out.display());
+        }
         Cmd::Plot {
             name,
             seed,
@@ -1028,6 +1059,30 @@ fn main() -> Result<()> {
             let opts = options("replay", &detect);
             let mut cfg: UkfMonitorConfig<f64> = monitor_config(&Scenario::s2(), &opts);
             cfg.detector = opts.detector;
+            // A PX4 log is converted to the SPEC §10 CSV first.
+            let input = if input
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("ulg"))
+            {
+                let csv = std::env::temp_dir().join(format!(
+                    "imu-fdi-{}-{}.csv",
+                    std::process::id(),
+                    input.file_stem().and_then(|s| s.to_str()).unwrap_or("log")
+                ));
+                let c = hal_sim::log_import::ulog_to_replay_csv(&input, &csv)?;
+                out!(
+                    "converted {}: {} IMU rows at {:.1} Hz, {} with GNSS velocity, {} with attitude -> {}",
+                    input.display(),
+                    c.rows,
+                    c.imu_rate_hz,
+                    c.gnss_rows,
+                    c.att_rows,
+                    csv.display()
+                );
+                csv
+            } else {
+                input
+            };
             let s =
                 hal_sim::replay::replay(&input, out.as_deref(), summary.as_deref(), cfg, grace)?;
             out!("replayed {} rows ({} skipped, {} IMU rows rejected), aiding {}, monitoring from {:?} s", s.rows, s.skipped_rows, s.rejected_imu_rows, s.aiding, s.monitoring_from_s);
