@@ -337,6 +337,12 @@ impl<const N: usize> ArraySim<N> {
         libm::round(self.spec.training_s * self.spec.rate_hz) as u32
     }
 
+    /// The lead-in a monitor may learn from: the training samples less a
+    /// 0.1 s margin, at least 3.
+    pub fn lead_in_samples(&self) -> u32 {
+        self.training_samples().saturating_sub(10).max(3)
+    }
+
     /// True body vector at scenario time `t`.
     pub fn truth(&self, t: f64) -> [f64; 3] {
         // The lead-in always manoeuvres; the scenario starts at rest and

@@ -92,14 +92,7 @@ pub fn run_array<T: Real, const N: usize>(
     let geometry64 =
         Geometry::<f64, N>::new(&spec.directions).map_err(|e| anyhow::anyhow!("{e:?}"))?;
     let sim = ArraySim::new(spec, seed);
-    // Two thirds of the lead-in train, the rest calibrates the thresholds.
-    let lead_in = sim.training_samples().saturating_sub(10).max(3);
-    if cfg.calibrate_samples > 0 {
-        cfg.train_samples = lead_in * 2 / 3;
-        cfg.calibrate_samples = lead_in - cfg.train_samples;
-    } else {
-        cfg.train_samples = lead_in;
-    }
+    cfg.set_lead_in(sim.lead_in_samples());
     let mut monitor =
         ParityMonitor::<T, N, WINDOW>::new(&geometry, cfg).map_err(|e| anyhow::anyhow!("{e:?}"))?;
     let gyro = spec.kind == ArrayKind::Gyro;
@@ -140,11 +133,7 @@ pub fn run_array<T: Real, const N: usize>(
     let (mut iso_sum, mut iso_n) = (0.0, 0u64);
     let mut trained = false;
     for s in sim {
-        let readings: [Reading<T>; N] = s.readings.map(|r| match r {
-            Reading::Sample(x) => Reading::Sample(T::lit(x)),
-            Reading::Missing => Reading::Missing,
-            Reading::BusError => Reading::BusError,
-        });
+        let readings: [Reading<T>; N] = s.readings.map(|r| r.map(T::lit));
         let report = monitor.step(&readings);
         for (k, st) in report.status.iter().enumerate() {
             if *st != SensorStatus::Healthy

@@ -95,16 +95,27 @@ where
                 .label(label.as_str())
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], c));
         }
-        chart
-            .configure_series_labels()
-            .label_font(("sans-serif", 10))
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK.mix(0.3))
-            .draw()
-            .map_err(|e| anyhow!("{e:?}"))?;
+        legend(&mut chart, 10)?;
     }
     root.present().map_err(|e| anyhow!("{e:?}"))?;
     Ok(())
+}
+
+/// Draws the series legend of a chart (framed, semi-transparent).
+fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    font: u32,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    chart
+        .configure_series_labels()
+        .label_font(("sans-serif", font))
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK.mix(0.3))
+        .draw()
+        .map_err(|e| anyhow!("{e:?}"))
 }
 
 /// Renders `panels` to `stem.png` and `stem.svg`; returns both paths.
@@ -226,9 +237,7 @@ pub fn plot_parity<const N: usize>(
     let g = Geometry::<f32, N>::new(&dirs).map_err(|e| anyhow!("{e:?}"))?;
     let sim = ArraySim::new(spec, seed);
     let mut cfg = crate::array_run::array_config::<f32, N>(spec);
-    let lead = sim.training_samples().saturating_sub(10).max(3);
-    cfg.train_samples = lead * 2 / 3;
-    cfg.calibrate_samples = lead - cfg.train_samples;
+    cfg.set_lead_in(sim.lead_in_samples());
     let mut m = ParityMonitor::<f32, N, 32>::new(&g, cfg).map_err(|e| anyhow!("{e:?}"))?;
     let onset = spec
         .faults
@@ -238,11 +247,7 @@ pub fn plot_parity<const N: usize>(
     let (mut before, mut after, mut glt, mut thr) = (vec![], vec![], vec![], vec![]);
     let mut isolated_at = None;
     for s in sim {
-        let r: [Reading<f32>; N] = s.readings.map(|r| match r {
-            Reading::Sample(x) => Reading::Sample(x as f32),
-            Reading::Missing => Reading::Missing,
-            Reading::BusError => Reading::BusError,
-        });
+        let r: [Reading<f32>; N] = s.readings.map(|r| r.map(|x| x as f32));
         let rep = m.step(&r);
         if rep.isolated.is_some() {
             isolated_at.get_or_insert(s.t);
@@ -327,12 +332,7 @@ where
         .map_err(|e| anyhow!("{e:?}"))?
         .label("after the fault")
         .legend(|(x, y)| Circle::new((x + 5, y), 3, RED_.filled()));
-    c.configure_series_labels()
-        .label_font(("sans-serif", 11))
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK.mix(0.3))
-        .draw()
-        .map_err(|e| anyhow!("{e:?}"))?;
+    legend(&mut c, 11)?;
     let x0 = glt.first().map_or(0.0, |p| p.0);
     let x1 = glt.last().map_or(1.0, |p| p.0).max(x0 + 1e-6);
     let ymax = glt
@@ -364,12 +364,7 @@ where
         .map_err(|e| anyhow!("{e:?}"))?
         .label("threshold")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], RED_));
-    c.configure_series_labels()
-        .label_font(("sans-serif", 11))
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK.mix(0.3))
-        .draw()
-        .map_err(|e| anyhow!("{e:?}"))?;
+    legend(&mut c, 11)?;
     root.present().map_err(|e| anyhow!("{e:?}"))?;
     Ok(())
 }

@@ -16,6 +16,17 @@ pub enum Reading<T> {
     BusError,
 }
 
+impl<T> Reading<T> {
+    /// The same reading with its sample converted (e.g. `f64` → `f32`).
+    pub fn map<U>(self, f: impl FnOnce(T) -> U) -> Reading<U> {
+        match self {
+            Self::Sample(x) => Reading::Sample(f(x)),
+            Self::Missing => Reading::Missing,
+            Self::BusError => Reading::BusError,
+        }
+    }
+}
+
 /// Health of one sensor this period.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -67,6 +67,18 @@ pub struct ParityConfig<T> {
 }
 
 impl<T: Real> ParityConfig<T> {
+    /// Spends a fault-free lead-in of `samples` on training and, when
+    /// calibration is enabled, calibration: two thirds train, the rest
+    /// calibrates.
+    pub fn set_lead_in(&mut self, samples: u32) {
+        if self.calibrate_samples > 0 {
+            self.train_samples = samples * 2 / 3;
+            self.calibrate_samples = samples - self.train_samples;
+        } else {
+            self.train_samples = samples;
+        }
+    }
+
     /// Gyro array defaults for `rate_hz` samples/s and full scale `fs`
     /// (rad/s): 0.1 s blocks, 1 s window, 30 s training, α = 1e-9 per
     /// decision with margin 1.5, CUSUM tuned to 0.05 °/s with ARL0 10⁹

@@ -154,9 +154,7 @@ fn parity_s4_on_target() -> Result<(), &'static str> {
     let spec = ArraySpec::s4();
     let sim = ArraySim::new(&spec, 1);
     let mut cfg = ParityConfig::<f32>::gyro(spec.rate_hz, spec.errors.full_scale as f32);
-    let lead_in = sim.training_samples().saturating_sub(10);
-    cfg.train_samples = lead_in * 2 / 3;
-    cfg.calibrate_samples = lead_in - cfg.train_samples;
+    cfg.set_lead_in(sim.lead_in_samples());
     let g = Geometry::<f32, 6>::cone6();
     let t0 = instructions();
     let mut m = ParityMonitor::<f32, 6, 16>::new(&g, cfg).map_err(|_| "configuration refused")?;
@@ -165,11 +163,7 @@ fn parity_s4_on_target() -> Result<(), &'static str> {
     let mut isolated = None;
     let mut early_alarm = false;
     for s in sim {
-        let r: [Reading<f32>; 6] = s.readings.map(|r| match r {
-            Reading::Sample(x) => Reading::Sample(x as f32),
-            Reading::Missing => Reading::Missing,
-            Reading::BusError => Reading::BusError,
-        });
+        let r: [Reading<f32>; 6] = s.readings.map(|r| r.map(|x| x as f32));
         let t0 = instructions();
         let rep = core::hint::black_box(m.step(&r));
         let c = instructions().wrapping_sub(t0);
