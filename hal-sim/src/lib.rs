@@ -29,6 +29,8 @@ pub mod array_sweep;
 #[cfg(feature = "std")]
 pub mod campaign;
 #[cfg(feature = "std")]
+pub mod inject;
+#[cfg(feature = "std")]
 pub mod log_import;
 #[cfg(feature = "std")]
 pub mod metrics;

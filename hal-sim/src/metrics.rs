@@ -213,8 +213,9 @@ pub fn evaluate(trace: &Trace) -> RunMetrics {
         covariance_resets: rows.last().map_or(0, |r| u64::from(r.covariance_resets)),
         ..RunMetrics::default()
     };
-    // Per fault row: detection rate, delay, RMSE.
-    for fr in scn.faults.iter() {
+    // Per additive fault row: detection rate, delay, RMSE. Hardware rows
+    // have no size or sign to score this way: see `hardware_detections`.
+    for fr in scn.faults.iter().filter(|r| !r.is_hardware()) {
         let j = fr.channel;
         let Some(c) = m.channels.get_mut(j) else {
             continue;
@@ -304,4 +305,83 @@ pub fn evaluate(trace: &Trace) -> RunMetrics {
     }
     m.finish();
     m
+}
+
+/// How the monitor saw one hardware-fault row (SPEC §8 S5): through a
+/// health check of the sample, or through a flag on the faulty channel.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct HardwareDetection {
+    /// The fault row.
+    pub kind: String,
+    /// Its channel name.
+    pub channel: String,
+    /// Onset, s.
+    pub start: f64,
+    /// End, s.
+    pub end: f64,
+    /// First health flag from onset to end + L, s after onset, and which.
+    pub first_health: Option<(f64, String)>,
+    /// First flag (either sign) on the faulty channel, s after onset.
+    pub first_flag: Option<f64>,
+    /// Samples with a flag on another channel in the same interval.
+    pub other_channel_samples: usize,
+}
+
+fn health_names(h: &imu_fdi::monitor::Health) -> String {
+    let mut v = Vec::new();
+    for (on, name) in [
+        (h.input_invalid, "input_invalid"),
+        (h.frozen, "frozen"),
+        (h.saturated, "saturated"),
+        (h.dt_out_of_range, "dt_out_of_range"),
+    ] {
+        if on {
+            v.push(name);
+        }
+    }
+    v.join("+")
+}
+
+/// The hardware rows of the trace's scenario, each with how it was seen
+/// (from onset to end + the latency allowance L).
+pub fn hardware_detections(trace: &Trace) -> Vec<HardwareDetection> {
+    trace
+        .scenario
+        .faults
+        .iter()
+        .filter(|r| r.is_hardware())
+        .map(|r| {
+            let within = trace
+                .rows
+                .iter()
+                .filter(|x| x.t >= r.start && x.t < r.end + trace.latency_s);
+            let mut d = HardwareDetection {
+                kind: format!("{:?}", r.kind),
+                channel: CHANNEL_NAMES
+                    .get(r.channel)
+                    .map_or(String::new(), |c| (*c).to_string()),
+                start: r.start,
+                end: r.end,
+                first_health: None,
+                first_flag: None,
+                other_channel_samples: 0,
+            };
+            for x in within {
+                let names = health_names(&x.health);
+                if d.first_health.is_none() && !names.is_empty() {
+                    d.first_health = Some((x.t - r.start, names));
+                }
+                for (c, f) in x.flag.iter().enumerate() {
+                    if f.is_some_and(|f| f != 0) {
+                        if c == r.channel {
+                            d.first_flag.get_or_insert(x.t - r.start);
+                        } else {
+                            d.other_channel_samples += 1;
+                        }
+                    }
+                }
+            }
+            d
+        })
+        .collect()
 }

@@ -372,6 +372,19 @@ pub fn injection_sizes(kind: ArrayKind) -> Vec<f64> {
 /// ends mid-message (truncated, or power lost) is read up to that point;
 /// the number of such errors is returned in [`ImuLog::skipped`].
 pub fn read_dataflash(path: &Path) -> Result<ImuLog> {
+    let log = read_dataflash_imus(path)?;
+    if log.count < 2 {
+        bail!(
+            "{}: fewer than two IMU instances (IMU, IMU2, IMU3) in the log",
+            path.display()
+        );
+    }
+    Ok(log)
+}
+
+/// Reads every IMU instance of a DataFlash log (one or more), keeping the
+/// rows where all instances share a timestamp.
+pub fn read_dataflash_imus(path: &Path) -> Result<ImuLog> {
     use std::collections::BTreeMap;
     let file = ardupilot_binlog::File::open(path)
         .with_context(|| format!("cannot read {}", path.display()))?;
@@ -418,11 +431,8 @@ pub fn read_dataflash(path: &Path) -> Result<ImuLog> {
             *slot = Some(sample);
         }
     }
-    if instances < 2 {
-        bail!(
-            "{}: fewer than two IMU instances (IMU, IMU2, IMU3) in the log",
-            path.display()
-        );
+    if instances == 0 {
+        bail!("{}: no IMU messages in the log", path.display());
     }
     let mut log = ImuLog {
         count: instances,

@@ -45,6 +45,8 @@ pub struct TraceRow {
     pub covariance_resets: u32,
     /// Any health flag raised.
     pub health_event: bool,
+    /// The health flags of this step.
+    pub health: imu_fdi::monitor::Health,
 }
 
 /// A recorded run.
@@ -130,6 +132,7 @@ pub fn run_with<T: Real>(
             }),
             covariance_resets: r.covariance_resets,
             health_event: r.health != imu_fdi::monitor::Health::default(),
+            health: r.health,
         });
     }
     Ok(Trace {

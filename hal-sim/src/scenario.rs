@@ -200,6 +200,18 @@ fn name(s: &str) -> heapless::String<32> {
     n
 }
 
+/// S5: the SPEC §8 hardware faults, one per channel, on the AUV
+/// (stuck, dropout of the whole sample, clipping, spike bursts, noise ×10,
+/// scale factor +5 %).
+pub const S5_TABLE: [FaultRow; 6] = [
+    row(5, 10.0, 15.0, FaultKind::Stuck, 1.0),
+    row(0, 20.0, 21.0, FaultKind::Dropout, 1.0),
+    row(0, 30.0, 35.0, FaultKind::Clip(0.2), 1.0),
+    row(4, 40.0, 45.0, FaultKind::Spikes(0.5), 1.0),
+    row(2, 50.0, 55.0, FaultKind::NoiseIncrease(10.0), 1.0),
+    row(3, 60.0, 65.0, FaultKind::ScaleFactor(0.05), 1.0),
+];
+
 fn table(rows: &[FaultRow]) -> heapless::Vec<FaultRow, MAX_FAULTS> {
     rows.iter().take(MAX_FAULTS).copied().collect()
 }
@@ -250,6 +262,15 @@ impl Scenario {
         }
     }
 
+    /// S5: the hardware faults of [`S5_TABLE`] on the AUV, 70 s.
+    pub fn s5() -> Self {
+        Self {
+            name: name("s5"),
+            faults: table(&S5_TABLE),
+            ..Self::auv_fault_free(70.0)
+        }
+    }
+
     /// S3: \[OTS\] Table 1 on the aircraft in gusty wind, 60 s, realistic
     /// sensors: MEMS errors of SPEC §8a, GNSS velocity (σ 0.05 m/s) and
     /// attitude (σ 0.1° roll/pitch, 0.2° heading) at 10 Hz.
@@ -297,13 +318,21 @@ impl Scenario {
             "aircraft-hour" => Some(Self::aircraft_fault_free(3600.0)),
             "s3" | "S3" => Some(Self::s3()),
             "s3-paper" => Some(Self::s3_paper()),
+            "s5" | "S5" => Some(Self::s5()),
             _ => None,
         }
     }
 
     /// Names accepted by [`Scenario::builtin`].
-    pub const BUILTIN: [&'static str; 6] =
-        ["s1", "s2", "s3", "s3-paper", "auv-hour", "aircraft-hour"];
+    pub const BUILTIN: [&'static str; 7] = [
+        "s1",
+        "s2",
+        "s3",
+        "s3-paper",
+        "s5",
+        "auv-hour",
+        "aircraft-hour",
+    ];
 
     /// The additive fault on every channel at `t`.
     pub fn fault_at(&self, t: f64) -> [f64; 6] {

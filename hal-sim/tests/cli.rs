@@ -378,7 +378,7 @@ fn px4_ulog_converts_and_replays_from_the_cli() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let s = String::from_utf8_lossy(&o.stdout);
     assert!(
-        s.contains("341 IMU rows") && s.contains("175 rows with GNSS velocity"),
+        s.contains("341 rows of 1 IMU(s)") && s.contains("175 rows with GNSS velocity"),
         "{s}"
     );
     let header = std::fs::read_to_string(&out).unwrap();
@@ -412,5 +412,128 @@ fn px4_ulog_converts_and_replays_from_the_cli() {
         String::from_utf8_lossy(&o.stderr).contains("fake.ulg"),
         "{}",
         String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+fn json(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn channel<'a>(s: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
+    s["channels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["channel"] == name)
+        .unwrap()
+}
+
+#[test]
+fn dataflash_log_replays_every_imu_and_attributes_common_mode_flags() {
+    let bin_log = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/ap_log171_head.bin"
+    );
+    // Learning before the GPS fix (45 s) cannot learn the accelerometer
+    // offsets: when GPS velocity arrives, a_z is flagged on all three IMUs at
+    // once, which the replay attributes to the aiding/model, not to an IMU.
+    let summary = tmp("ap-head.json");
+    let o = bin()
+        .args(["replay", bin_log, "--learn", "10", "--summary"])
+        .arg(&summary)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("3526 rows of 3 IMU(s)") && out.contains("191 with GNSS velocity"),
+        "{out}"
+    );
+    let s = json(&summary);
+    assert_eq!(s["imus"], 3);
+    assert_eq!(s["profile"], "Flight");
+    for name in ["az", "imu1_az", "imu2_az"] {
+        let c = channel(&s, name);
+        let flagged = c["flagged_samples"].as_u64().unwrap();
+        assert!(flagged > 1000, "{c}");
+        assert_eq!(c["common_mode_samples"].as_u64().unwrap(), flagged, "{c}");
+    }
+    // Learning with GPS, then faults injected on IMU 1: found on IMU 1 only.
+    let faults = tmp("ap-head-faults.toml");
+    std::fs::write(
+        &faults,
+        "[sizes]\naccel = [1.0, 0.0, 0.0]\ngyro = [0.17453292519943295, 0.0, 0.0]\n\
+         f_unit = [1.0, 0.017453292519943295]\n\
+         [[faults]]\nchannel = 5\nstart = 15.0\nend = 20.0\nkind = \"E1\"\nsign = 1.0\n\
+         [[faults]]\nchannel = 1\nstart = 28.0\nend = 34.0\nkind = \"E1\"\nsign = -1.0\n",
+    )
+    .unwrap();
+    let o = bin()
+        .args(["replay", bin_log, "--from", "48", "--learn", "10"])
+        .arg("--faults")
+        .arg(&faults)
+        .args(["--fault-offset", "50", "--inject-imu", "1", "--summary"])
+        .arg(&summary)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = json(&summary);
+    let gz = channel(&s, "imu1_gz");
+    let t = gz["first_correct_s"].as_f64().unwrap();
+    assert!(
+        (65.0..68.5).contains(&t),
+        "10 °/s step at 65 s found at {t}: {gz}"
+    );
+    let ay = channel(&s, "imu1_ay");
+    let t = ay["first_correct_s"].as_f64().unwrap();
+    assert!(
+        (78.0..80.0).contains(&t),
+        "−1 m/s² step at 78 s found at {t}: {ay}"
+    );
+    assert!(ay["correct_samples"].as_u64().unwrap() > 200, "{ay}");
+    for c in s["channels"].as_array().unwrap() {
+        let name = c["channel"].as_str().unwrap();
+        if !name.starts_with("imu") || name.starts_with("imu2_g") {
+            assert_eq!(c["flagged_samples"], 0, "clean IMU flagged: {c}");
+        }
+    }
+}
+
+#[test]
+fn replay_rejects_bad_fault_tables_and_instances_by_name() {
+    let ulg = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/px4_fmuv3_outdoor_flight.ulg"
+    );
+    let bad = tmp("bad-faults.toml");
+    std::fs::write(
+        &bad,
+        "[[faults]]\nchannel = 9\nstart = 1.0\nend = 2.0\nkind = \"Stuck\"\nsign = 1.0\n",
+    )
+    .unwrap();
+    let o = bin()
+        .args(["replay", ulg, "--faults"])
+        .arg(&bad)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("bad-faults.toml") && e.contains("channel must be 0–5"),
+        "{e}"
+    );
+    let steps = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenarios/faults/steps.toml"
+    );
+    let o = bin()
+        .args(["replay", ulg, "--faults", steps, "--inject-imu", "2"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("cannot inject on IMU 2: the file has 1 IMU(s)"),
+        "{e}"
     );
 }

@@ -61,7 +61,7 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     phase_time: T,
     prev_imu: ImuVec<T>,
     frozen_count: u16,
-    saturation_holdoff: T,
+    stats_holdoff: T,
     last_input_b: Mat6<T>,
     last_h: Mat6<T>,
     last_dt: T,
@@ -114,7 +114,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             phase_time: T::zero(),
             prev_imu: ImuVec::zeros(),
             frozen_count: 0,
-            saturation_holdoff: T::zero(),
+            stats_holdoff: T::zero(),
             last_input_b: Mat6::identity(),
             last_h: Mat6::identity(),
             last_dt: cfg.imu_period,
@@ -194,11 +194,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 .zip(self.cfg.full_scale.iter())
                 .any(|(v, fs)| v.abs() >= *fs * T::lit(0.98));
         if saturated {
-            self.saturation_holdoff = T::lit(0.5);
+            self.stats_holdoff = T::lit(0.5);
         }
         health.saturated = saturated;
         let elapsed = dt_use.unwrap_or(T::zero());
-        self.saturation_holdoff = (self.saturation_holdoff - elapsed).max(T::zero());
+        self.stats_holdoff = (self.stats_holdoff - elapsed).max(T::zero());
         for s in self.since_seen.iter_mut() {
             *s += elapsed;
         }
@@ -218,8 +218,16 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
 
         // --- prediction ---------------------------------------------------
         let usable = in_range && !health.frozen;
-        if let (Some(dt), true) = (dt_use, usable) {
-            let u = imu - self.nominal_bias;
+        if !usable {
+            // The filter dead-reckons on the last good sample (below); its
+            // innovations say nothing about the IMU until it has settled.
+            self.stats_holdoff = T::lit(0.5);
+        }
+        if let Some(dt) = dt_use {
+            // Through a dropout or an invalid/frozen sample, the last good
+            // sample stands in: better than freezing the state while the
+            // vehicle moves, which would flag every channel afterwards.
+            let u = if usable { *imu } else { self.prev_imu } - self.nominal_bias;
             match self.predict(&u, dt) {
                 Ok(reset) => health.covariance_reset |= reset,
                 Err(ModelError::PitchSingularity) => health.pitch_singular = true,
@@ -352,7 +360,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         } else {
             h * self.sensitivity
         };
-        let record = self.saturation_holdoff <= T::zero();
+        let record = self.stats_holdoff <= T::zero();
         let mut rejected = false;
         for (i, d) in out.diag.iter().enumerate() {
             if !d.available {

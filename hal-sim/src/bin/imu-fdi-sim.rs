@@ -8,6 +8,7 @@ use hal_sim::metrics::{evaluate, RunMetrics};
 use hal_sim::runner::{monitor_config, run, RunOptions};
 use hal_sim::Scenario;
 use imu_fdi::detect::{Detector, Statistic};
+use imu_fdi::model::AidingKind;
 use imu_fdi::monitor::UkfMonitorConfig;
 
 /// `println!` that ends the program quietly when stdout is closed (e.g.
@@ -44,6 +45,24 @@ macro_rules! out_nl {
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,
+}
+
+/// Replay tuning profile.
+#[derive(Clone, Copy, ValueEnum)]
+enum ProfileArg {
+    Sim,
+    Flight,
+    Auto,
+}
+
+impl From<ProfileArg> for hal_sim::replay::Profile {
+    fn from(p: ProfileArg) -> Self {
+        match p {
+            ProfileArg::Sim => Self::Sim,
+            ProfileArg::Flight => Self::Flight,
+            ProfileArg::Auto => Self::Auto,
+        }
+    }
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -163,9 +182,11 @@ enum Cmd {
         #[arg(long, default_value = "docs/gallery")]
         out: PathBuf,
     },
-    /// Converts a PX4 ULog (.ulg) to the SPEC §10 replay CSV: primary IMU
-    /// (sensor_combined), GNSS velocity (3-D fix), attitude (quaternion ->
-    /// Euler). `replay` accepts .ulg directly through the same conversion.
+    /// Converts a flight log to the SPEC §10 replay CSV: a PX4 ULog (.ulg:
+    /// primary IMU from sensor_combined, GNSS velocity with a 3-D fix,
+    /// attitude quaternion -> Euler) or an ArduPilot DataFlash log (.bin:
+    /// IMU/IMU2/IMU3, GPS velocity with a 3-D fix, ATT). `replay` accepts
+    /// both directly through the same conversion.
     Convert {
         input: PathBuf,
         #[arg(long)]
@@ -237,7 +258,9 @@ enum Cmd {
         #[arg(long)]
         f32: bool,
     },
-    /// Run a built-in scenario (s1, s2, s3, s3-paper, auv-hour, aircraft-hour) over seeds and print the per-channel table.
+    /// Run a scenario over seeds and print the per-channel table: a built-in
+    /// (s1, s2, s3, s3-paper, s5, auv-hour, aircraft-hour; s4 runs the parity
+    /// monitor on the cone of six gyros) or a .toml scenario file.
     Scenario {
         /// Scenario name.
         name: String,
@@ -311,6 +334,40 @@ enum Cmd {
         /// With truth columns: seconds after a fault during which flags are not false alarms (2·L).
         #[arg(long, default_value_t = 4.4)]
         grace: f64,
+        /// Ignore rows before this time, s (start the monitor in flight).
+        #[arg(long)]
+        from: Option<f64>,
+        /// Ignore rows after this time, s.
+        #[arg(long)]
+        to: Option<f64>,
+        /// Fault table (TOML: [sizes] and [[faults]], or a scenario file) to
+        /// inject on top of the recorded IMU.
+        #[arg(long)]
+        faults: Option<PathBuf>,
+        /// Added to the fault table's times (a scenario's table starts near 0 s).
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        fault_offset: f64,
+        /// IMU instance the faults go on.
+        #[arg(long, default_value_t = 0)]
+        inject_imu: usize,
+        /// Seed of injected noise (NoiseIncrease).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Tuning: sim (the S2/S3 scenarios'), flight (real logs: wide aiding
+        /// noise, IMU noise measured on the log), auto (sim if the file has
+        /// truth columns, else flight).
+        #[arg(long, value_enum, default_value_t = ProfileArg::Auto)]
+        profile: ProfileArg,
+        /// Learning phase, s (flight default 20).
+        #[arg(long)]
+        learn: Option<f64>,
+        /// Flight profile: aiding velocity σ, m/s.
+        #[arg(long, default_value_t = 0.3)]
+        vel_sigma: f64,
+        /// Flight profile: attitude σ in degrees, one value or roll,pitch,yaw
+        /// (an autopilot's own estimate is not independent of the IMU: keep it wide).
+        #[arg(long, value_delimiter = ',', default_value = "1,1,10")]
+        att_sigma_deg: Vec<f64>,
         #[command(flatten)]
         detect: DetectOpts,
     },
@@ -346,6 +403,65 @@ fn campaign(scn: &Scenario, first: u64, seeds: u64, opts: &RunOptions) -> Result
         total.merge(&evaluate(&trace));
     }
     Ok(total)
+}
+
+/// The S5 table: how each hardware fault row was seen over the seeds.
+fn print_hardware(scn: &Scenario, first: u64, seeds: u64, opts: &RunOptions) -> Result<()> {
+    let mut per_row: Vec<Vec<hal_sim::metrics::HardwareDetection>> = Vec::new();
+    for seed in first..first + seeds {
+        let t = run::<f32>(scn, seed, opts).map_err(|e| anyhow!("monitor configuration: {e:?}"))?;
+        for (i, d) in hal_sim::metrics::hardware_detections(&t)
+            .into_iter()
+            .enumerate()
+        {
+            if per_row.len() <= i {
+                per_row.push(Vec::new());
+            }
+            if let Some(v) = per_row.get_mut(i) {
+                v.push(d);
+            }
+        }
+    }
+    out!("hardware faults over {seeds} seeds (seen = a health flag, or a flag on the faulty channel, from onset to end + L):");
+    out!("  fault                  ch  interval s     seen  delay mean/max s  by health  other-channel flag samples");
+    for ds in &per_row {
+        let Some(d0) = ds.first() else { continue };
+        let delays: Vec<f64> = ds
+            .iter()
+            .filter_map(|d| {
+                let h = d.first_health.as_ref().map(|(s, _)| *s);
+                match (h, d.first_flag) {
+                    (Some(a), Some(b)) => Some(a.min(b)),
+                    (a, b) => a.or(b),
+                }
+            })
+            .collect();
+        let by_health = ds.iter().filter(|d| d.first_health.is_some()).count();
+        let other: usize = ds.iter().map(|d| d.other_channel_samples).sum();
+        let (mean, max) = if delays.is_empty() {
+            ("-".to_string(), "-".to_string())
+        } else {
+            (
+                format!("{:.2}", delays.iter().sum::<f64>() / delays.len() as f64),
+                format!("{:.2}", delays.iter().copied().fold(0.0, f64::max)),
+            )
+        };
+        out!(
+            "  {:<22} {:<3} {:>5.1}-{:<5.1}  {:>3}/{:<3}  {:>6}/{:<6}     {:>3}/{:<3}  {}",
+            d0.kind,
+            d0.channel,
+            d0.start,
+            d0.end,
+            delays.len(),
+            ds.len(),
+            mean,
+            max,
+            by_health,
+            ds.len(),
+            other
+        );
+    }
+    Ok(())
 }
 
 fn scenario(name: &str) -> Result<Scenario> {
@@ -642,20 +758,12 @@ fn main() -> Result<()> {
     match cli.cmd {
         Cmd::Parity { first_seed, seeds } => parity_s4(first_seed, seeds)?,
         Cmd::Convert { input, out } => {
-            if !input
-                .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("ulg"))
-            {
-                return Err(anyhow!(
-                    "{}: unknown file type for convert (expected a PX4 .ulg)",
-                    input.display()
-                ));
-            }
-            let c = hal_sim::log_import::ulog_to_replay_csv(&input, &out)?;
+            let c = hal_sim::log_import::log_to_replay_csv(&input, &out)?;
             out!(
-                "converted {}: {} IMU rows, t = {:.2}..{:.2} s ({:.1} Hz), {} rows with GNSS velocity, {} with attitude",
+                "converted {}: {} rows of {} IMU(s), t = {:.2}..{:.2} s ({:.1} Hz), {} rows with GNSS velocity, {} with attitude",
                 input.display(),
                 c.rows,
+                c.imu_instances,
                 c.span.0,
                 c.span.1,
                 c.imu_rate_hz,
@@ -663,6 +771,9 @@ fn main() -> Result<()> {
                 c.att_rows
             );
             out!("wrote {}", out.display());
+            if let Some(why) = &c.ended_early {
+                out!("warning: the log parser stopped early ({why}); only the part before it was converted");
+            }
         }
         Cmd::Plot {
             name,
@@ -805,6 +916,16 @@ fn main() -> Result<()> {
             json,
             trace,
         } => {
+            // S4 is the redundant-sensor scenario: the parity monitor's run.
+            if name.eq_ignore_ascii_case("s4") {
+                return parity_s4(seed, seeds.max(1));
+            }
+            if name.eq_ignore_ascii_case("s6") {
+                return Err(anyhow!(
+                    "S6 is the real logs: `replay LOG.ulg|LOG.bin|LOG.csv [--faults TABLE.toml]` \
+                     for the UKF monitor, `parity-replay` for redundant IMUs (see README, Real flight logs)"
+                ));
+            }
             let scn = scenario(&name)?;
             let opts = options(&name, &detect);
             if let Some(p) = trace {
@@ -814,6 +935,9 @@ fn main() -> Result<()> {
                 out!("wrote trace of seed {seed} to {}", p.display());
             }
             let m = print_run("scenario", &scn, seed, seeds.max(1), &opts)?;
+            if scn.faults.iter().any(|r| r.is_hardware()) {
+                print_hardware(&scn, seed, seeds.max(1), &opts)?;
+            }
             if let Some(p) = json {
                 std::fs::write(&p, serde_json::to_string_pretty(&m)?)?;
                 out!("wrote {}", p.display());
@@ -1054,41 +1178,123 @@ fn main() -> Result<()> {
             out,
             summary,
             grace,
+            from,
+            to,
+            faults,
+            fault_offset,
+            inject_imu,
+            seed,
+            profile,
+            learn,
+            vel_sigma,
+            att_sigma_deg,
             detect,
         } => {
-            let opts = options("replay", &detect);
-            let mut cfg: UkfMonitorConfig<f64> = monitor_config(&Scenario::s2(), &opts);
-            cfg.detector = opts.detector;
-            // A PX4 log is converted to the SPEC §10 CSV first.
-            let input = if input
+            let ropts = options("replay", &detect);
+            let sim_cfg = |kind: AidingKind| {
+                let scn = match kind {
+                    AidingKind::DvlCompass => Scenario::s2(),
+                    AidingKind::GnssAttitude => Scenario::s3(),
+                };
+                let mut c: UkfMonitorConfig<f64> = monitor_config(&scn, &ropts);
+                c.detector = ropts.detector;
+                c
+            };
+            let deg = std::f64::consts::PI / 180.0;
+            let att = match att_sigma_deg.as_slice() {
+                [a] => [a * deg, a * deg, a * deg],
+                [r, p, y] => [r * deg, p * deg, y * deg],
+                _ => {
+                    return Err(anyhow!(
+                        "--att-sigma-deg takes one value or three (roll,pitch,yaw)"
+                    ))
+                }
+            };
+            let inject = match faults {
+                Some(f) => Some((
+                    hal_sim::inject::FaultTable::read(&f)?.shifted(fault_offset),
+                    inject_imu,
+                )),
+                None => None,
+            };
+            let opts = hal_sim::replay::ReplayOptions {
+                grace_s: grace,
+                from_s: from,
+                to_s: to,
+                inject,
+                seed,
+                profile: profile.into(),
+                learn_s: learn,
+                vel_sigma,
+                att_sigma: att,
+            };
+            // A flight log is converted to the SPEC §10 CSV first.
+            let is_log = input
                 .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("ulg"))
-            {
+                .is_some_and(|e| e.eq_ignore_ascii_case("ulg") || e.eq_ignore_ascii_case("bin"));
+            let input = if is_log {
                 let csv = std::env::temp_dir().join(format!(
                     "imu-fdi-{}-{}.csv",
                     std::process::id(),
                     input.file_stem().and_then(|s| s.to_str()).unwrap_or("log")
                 ));
-                let c = hal_sim::log_import::ulog_to_replay_csv(&input, &csv)?;
+                let c = hal_sim::log_import::log_to_replay_csv(&input, &csv)?;
                 out!(
-                    "converted {}: {} IMU rows at {:.1} Hz, {} with GNSS velocity, {} with attitude -> {}",
+                    "converted {}: {} rows of {} IMU(s) at {:.1} Hz, {} with GNSS velocity, {} with attitude -> {}",
                     input.display(),
                     c.rows,
+                    c.imu_instances,
                     c.imu_rate_hz,
                     c.gnss_rows,
                     c.att_rows,
                     csv.display()
                 );
+                if let Some(why) = &c.ended_early {
+                    out!("warning: the log parser stopped early ({why}); only the part before it was converted");
+                }
                 csv
             } else {
                 input
             };
-            let s =
-                hal_sim::replay::replay(&input, out.as_deref(), summary.as_deref(), cfg, grace)?;
-            out!("replayed {} rows ({} skipped, {} IMU rows rejected), aiding {}, monitoring from {:?} s", s.rows, s.skipped_rows, s.rejected_imu_rows, s.aiding, s.monitoring_from_s);
+            let s = hal_sim::replay::replay(
+                &input,
+                out.as_deref(),
+                summary.as_deref(),
+                sim_cfg,
+                &opts,
+            )?;
+            out!(
+                "replayed {} rows ({} skipped, {} IMU rows rejected) of {} IMU(s) at {:.1} Hz, t = {:.2}..{:.2} s; aiding {}, profile {}, monitoring from {:?} s ({} samples)",
+                s.rows,
+                s.skipped_rows,
+                s.rejected_imu_rows,
+                s.imus,
+                s.imu_rate_hz,
+                s.span_s.0,
+                s.span_s.1,
+                s.aiding,
+                s.profile,
+                s.monitoring_from_s,
+                s.monitored_samples
+            );
             for c in &s.channels {
+                let scored = match (c.fault_samples, c.correct_samples, c.false_alarm_samples) {
+                    (Some(f), Some(ok), Some(fa)) => format!(
+                        "; fault samples {f}, correct {ok}, first correct {:?} s, false-alarm samples {fa}",
+                        c.first_correct_s
+                    ),
+                    _ => String::new(),
+                };
+                let common = if s.imus >= 2 {
+                    format!(
+                        " ({} on every IMU at once: aiding/model)",
+                        c.common_mode_samples
+                    )
+                } else {
+                    String::new()
+                };
                 out!(
-                    "  {:<3} flagged {:>6} samples, first at {:?} s",
+                    "  {:<8} flagged {:>6} samples{common}, first at {:?} s{scored}",
                     c.channel,
                     c.flagged_samples,
                     c.first_detection_s
