@@ -257,6 +257,10 @@ enum Cmd {
         /// Run the two-stage monitor in f32 (default f64).
         #[arg(long)]
         f32: bool,
+        /// Q^f multiplier while a fault is tracked (1 = no adaptation: the
+        /// augmented UKF's fixed Q^f, for a like-for-like comparison).
+        #[arg(long)]
+        adapt_gain: Option<f64>,
     },
     /// Run a scenario over seeds and print the per-channel table: a built-in
     /// (s1, s2, s3, s3-paper, s5, auv-hour, aircraft-hour; s4 runs the parity
@@ -1051,6 +1055,7 @@ fn main() -> Result<()> {
             seeds,
             augmented,
             f32,
+            adapt_gain,
         } => {
             use hal_sim::ots::{
                 otsukf_config, run_augmented, run_otsukf, RmseAccumulator, Setting, PAPER_RMSE,
@@ -1068,9 +1073,17 @@ fn main() -> Result<()> {
             let mut false_flags = 0u64;
             for seed in first_seed..first_seed + seeds {
                 let (acc, ff) = if f32 {
-                    run_otsukf::<f32>(&scn, seed, otsukf_config::<f32>(&scn, setting))
+                    let mut c = otsukf_config::<f32>(&scn, setting);
+                    if let Some(g) = adapt_gain {
+                        c.adapt_gain = g as f32;
+                    }
+                    run_otsukf::<f32>(&scn, seed, c)
                 } else {
-                    run_otsukf::<f64>(&scn, seed, otsukf_config::<f64>(&scn, setting))
+                    let mut c = otsukf_config::<f64>(&scn, setting);
+                    if let Some(g) = adapt_gain {
+                        c.adapt_gain = g;
+                    }
+                    run_otsukf::<f64>(&scn, seed, c)
                 }
                 .ok_or_else(|| anyhow!("the two-stage monitor refused its configuration"))?;
                 two.merge(&acc);
