@@ -19,13 +19,17 @@ LOGS=(
   "px4_v6c_2imu_indoor_flight.ulg||150"
   "px4_v6c_2imu_indoor_flight.ulg|--att-sigma-deg 1,1,30|150"
   "px4_auavx21_bench_248hz.ulg||150"
+  # The CSV extracts, mapped (pyulog read the v6xrt log past the corrupt
+  # message at 432 s where px4-ulog stops: its whole 96 s are here).
+  "ap_log171_imu_3x.csv|--gnss $DATA/ap_log171_gps_vel_ned.csv --att $DATA/ap_log171_attitude_quat.csv --from 80 --to 239|150"
+  "px4_v6xrt_sensor_combined_primary_imu.csv|--gnss $DATA/px4_v6xrt_gps_vel_ned.csv --att $DATA/px4_v6xrt_attitude_quat.csv --from 415|460"
 )
 CH=(ax ay az gx gy gz)
 for entry in "${LOGS[@]}"; do
   IFS='|' read -r log opts onset <<<"$entry"
   # shellcheck disable=SC2086
   $BIN replay "$DATA/$log" $opts --summary "$TMP/free.json" >/dev/null
-  line="$log $opts: "
+  line="${log} ${opts//$DATA\//}: "
   line+=$(python3 -c '
 import json,sys
 s=json.load(open(sys.argv[1]))

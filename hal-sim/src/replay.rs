@@ -301,6 +301,14 @@ pub fn replay(
                 .map_or(String::new(), |f| format!(" after {f} s"))
         );
     }
+    if !rows.iter().any(|r| r.avail.iter().any(|a| *a)) {
+        bail!(
+            "{}: no aiding in the file (every dvl_*, gnss_* and att_* cell empty or absent): \
+             the UKF monitor needs a velocity or attitude reference to compare the IMU with; \
+             redundant IMUs without one go to `parity-replay`",
+            input.display()
+        );
+    }
     // The monitor's period is the log's median step, not an assumption.
     let mut dts: Vec<f64> = rows.windows(2).map(|w| w[1].t - w[0].t).collect();
     dts.sort_by(f64::total_cmp);

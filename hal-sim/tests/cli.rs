@@ -537,3 +537,40 @@ fn replay_rejects_bad_fault_tables_and_instances_by_name() {
         "{e}"
     );
 }
+
+#[test]
+fn csv_extract_without_aiding_is_converted_then_refused_by_name() {
+    let mut x = String::from(
+        "Time (s),Gyroscope X (deg/s),Gyroscope Y (deg/s),Gyroscope Z (deg/s),\
+         Accelerometer X (g),Accelerometer Y (g),Accelerometer Z (g)\n",
+    );
+    for k in 0..50 {
+        x += &format!("{},0.1,0.2,0.3,0,0,1\n", 0.01 * k as f64);
+    }
+    let xio = tmp("handheld.csv");
+    std::fs::write(&xio, x).unwrap();
+    let o = bin().arg("replay").arg(&xio).output().unwrap();
+    assert!(!o.status.success());
+    let out = String::from_utf8_lossy(&o.stdout);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        out.contains("converted") && out.contains("50 rows of 1 IMU(s)"),
+        "{out}"
+    );
+    assert!(
+        err.contains("handheld.csv") && err.contains("no aiding"),
+        "{err}"
+    );
+    // A .ulg does not take the extract's aiding files.
+    let ulg = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/px4_fmuv3_outdoor_flight.ulg"
+    );
+    let o = bin()
+        .args(["convert", ulg, "--gnss", "g.csv", "--out"])
+        .arg(tmp("x.csv"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--gnss and --att go with a CSV extract"));
+}

@@ -187,10 +187,21 @@ enum Cmd {
     /// attitude quaternion -> Euler) or an ArduPilot DataFlash log (.bin:
     /// IMU/IMU2/IMU3, GPS velocity with a 3-D fix, ATT). `replay` accepts
     /// both directly through the same conversion.
+    ///
+    /// A CSV extract not in SPEC §10 form (`../shared/data`: imu0_gyro_x_rad_s…,
+    /// gyro_x_rad_s…, or x-io's g and deg/s) is mapped too, with its GNSS
+    /// velocity (`--gnss`, fix ≥ 3 only) and attitude (`--att`, quaternion or
+    /// degrees) files.
     Convert {
         input: PathBuf,
         #[arg(long)]
         out: PathBuf,
+        /// GNSS velocity CSV of a CSV extract (time_s, vel_n_m_s, …).
+        #[arg(long)]
+        gnss: Option<PathBuf>,
+        /// Attitude CSV of a CSV extract (time_s, q_w… or roll_deg…).
+        #[arg(long)]
+        att: Option<PathBuf>,
     },
     /// Merges the per-run CSVs of campaign shards into one table.
     Merge {
@@ -338,13 +349,19 @@ enum Cmd {
         /// With truth columns: seconds after a fault during which flags are not false alarms (2·L).
         #[arg(long, default_value_t = 4.4)]
         grace: f64,
+        /// With a CSV extract: its GNSS velocity file (see `convert`).
+        #[arg(long)]
+        gnss: Option<PathBuf>,
+        /// With a CSV extract: its attitude file (see `convert`).
+        #[arg(long)]
+        att: Option<PathBuf>,
         /// Ignore rows before this time, s (start the monitor in flight).
         #[arg(long)]
         from: Option<f64>,
         /// Ignore rows after this time, s.
         #[arg(long)]
         to: Option<f64>,
-        /// Fault table (TOML: [sizes] and [[faults]], or a scenario file) to
+        /// Fault table (TOML: `[sizes]` and `[[faults]]`, or a scenario file) to
         /// inject on top of the recorded IMU.
         #[arg(long)]
         faults: Option<PathBuf>,
@@ -407,6 +424,22 @@ fn campaign(scn: &Scenario, first: u64, seeds: u64, opts: &RunOptions) -> Result
         total.merge(&evaluate(&trace));
     }
     Ok(total)
+}
+
+/// True when `path` reads as a CSV whose header has the SPEC §10 `t`
+/// column (or cannot be read: `replay` then reports it); false for a CSV
+/// extract that `convert` maps.
+fn has_time_column(path: &std::path::Path) -> bool {
+    let Ok(mut r) = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_path(path)
+    else {
+        return true;
+    };
+    match r.headers() {
+        Ok(h) => h.iter().any(|c| c == "t"),
+        Err(_) => true,
+    }
 }
 
 /// The S5 table: how each hardware fault row was seen over the seeds.
@@ -761,8 +794,18 @@ fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.cmd {
         Cmd::Parity { first_seed, seeds } => parity_s4(first_seed, seeds)?,
-        Cmd::Convert { input, out } => {
-            let c = hal_sim::log_import::log_to_replay_csv(&input, &out)?;
+        Cmd::Convert {
+            input,
+            out,
+            gnss,
+            att,
+        } => {
+            let c = hal_sim::log_import::any_to_replay_csv(
+                &input,
+                gnss.as_deref(),
+                att.as_deref(),
+                &out,
+            )?;
             out!(
                 "converted {}: {} rows of {} IMU(s), t = {:.2}..{:.2} s ({:.1} Hz), {} rows with GNSS velocity, {} with attitude",
                 input.display(),
@@ -1191,6 +1234,8 @@ fn main() -> Result<()> {
             out,
             summary,
             grace,
+            gnss,
+            att,
             from,
             to,
             faults,
@@ -1214,7 +1259,7 @@ fn main() -> Result<()> {
                 c
             };
             let deg = std::f64::consts::PI / 180.0;
-            let att = match att_sigma_deg.as_slice() {
+            let att_sigma = match att_sigma_deg.as_slice() {
                 [a] => [a * deg, a * deg, a * deg],
                 [r, p, y] => [r * deg, p * deg, y * deg],
                 _ => {
@@ -1239,28 +1284,36 @@ fn main() -> Result<()> {
                 profile: profile.into(),
                 learn_s: learn,
                 vel_sigma,
-                att_sigma: att,
+                att_sigma,
             };
             // A flight log is converted to the SPEC §10 CSV first.
             let is_log = input
                 .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("ulg") || e.eq_ignore_ascii_case("bin"));
+                .is_some_and(|e| e.eq_ignore_ascii_case("ulg") || e.eq_ignore_ascii_case("bin"))
+                || gnss.is_some()
+                || att.is_some()
+                || !has_time_column(&input);
+            let original = input.clone();
             let input = if is_log {
                 let csv = std::env::temp_dir().join(format!(
                     "imu-fdi-{}-{}.csv",
                     std::process::id(),
                     input.file_stem().and_then(|s| s.to_str()).unwrap_or("log")
                 ));
-                let c = hal_sim::log_import::log_to_replay_csv(&input, &csv)?;
+                let c = hal_sim::log_import::any_to_replay_csv(
+                    &input,
+                    gnss.as_deref(),
+                    att.as_deref(),
+                    &csv,
+                )?;
                 out!(
-                    "converted {}: {} rows of {} IMU(s) at {:.1} Hz, {} with GNSS velocity, {} with attitude -> {}",
+                    "converted {}: {} rows of {} IMU(s) at {:.1} Hz, {} with GNSS velocity, {} with attitude",
                     input.display(),
                     c.rows,
                     c.imu_instances,
                     c.imu_rate_hz,
                     c.gnss_rows,
-                    c.att_rows,
-                    csv.display()
+                    c.att_rows
                 );
                 if let Some(why) = &c.ended_early {
                     out!("warning: the log parser stopped early ({why}); only the part before it was converted");
@@ -1269,13 +1322,19 @@ fn main() -> Result<()> {
             } else {
                 input
             };
-            let s = hal_sim::replay::replay(
-                &input,
-                out.as_deref(),
-                summary.as_deref(),
-                sim_cfg,
-                &opts,
-            )?;
+            let result =
+                hal_sim::replay::replay(&input, out.as_deref(), summary.as_deref(), sim_cfg, &opts);
+            if is_log {
+                // The converted CSV was only an intermediate (`convert` keeps one).
+                let _ = std::fs::remove_file(&input);
+            }
+            let s = result.map_err(|e| {
+                if is_log {
+                    anyhow!("{} (after conversion): {e:#}", original.display())
+                } else {
+                    e
+                }
+            })?;
             out!(
                 "replayed {} rows ({} skipped, {} IMU rows rejected) of {} IMU(s) at {:.1} Hz, t = {:.2}..{:.2} s; aiding {}, profile {}, monitoring from {:?} s ({} samples)",
                 s.rows,
