@@ -18,6 +18,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
+use imu_fdi::math::wrap_pi_f64;
 use px4_ulog::full_parser::{read_file, SomeVec};
 
 /// What a conversion produced.
@@ -272,9 +273,11 @@ pub fn dataflash_to_replay_csv(input: &Path, out: &Path) -> Result<ImportSummary
                 *s = Some(vel);
             }
         } else {
-            let yaw = (v("Yaw") * deg + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
-                - std::f64::consts::PI;
-            let a = [v("Roll") * deg, v("Pitch") * deg, yaw];
+            let a = [
+                v("Roll") * deg,
+                v("Pitch") * deg,
+                wrap_pi_f64(v("Yaw") * deg),
+            ];
             if let (true, Some(s)) = (a.iter().all(|x| x.is_finite()), att.get_mut(idx)) {
                 *s = Some(a);
             }
@@ -329,10 +332,10 @@ pub fn log_to_replay_csv(input: &Path, out: &Path) -> Result<ImportSummary> {
     }
 }
 
-/// Column layouts of the CSV extracts that are not in SPEC §10 form
-/// (`../shared/data/SOURCES.md`): returns, per IMU instance, the six column
-/// indices `[a_x, a_y, a_z, p, q, r]`, the scale to m/s² and rad/s, and
-/// the axis signs to FRD.
+/// An IMU column layout of a CSV extract not in SPEC §10 form
+/// (`../shared/data/SOURCES.md`): per IMU instance the six column indices
+/// `[a_x, a_y, a_z, p, q, r]`, the scales to m/s² and rad/s, the axis signs
+/// to FRD.
 struct ImuLayout {
     columns: Vec<[usize; 6]>,
     accel_scale: f64,
@@ -340,72 +343,86 @@ struct ImuLayout {
     signs: [f64; 6],
 }
 
-fn imu_layout(headers: &csv::StringRecord) -> Option<ImuLayout> {
-    let find = |name: &str| headers.iter().position(|h| h.trim() == name);
-    // imu{k}_accel_x_m_s2 … (ArduPilot log171 extract), one or more IMUs.
-    let mut columns = Vec::new();
-    for k in 0.. {
-        let names = [
+/// Column names `[a_x … r]`, scales and signs of one known extract layout;
+/// `{k}` in a name stands for the IMU instance.
+struct KnownLayout {
+    names: [&'static str; 6],
+    accel_scale: f64,
+    gyro_scale: f64,
+    signs: [f64; 6],
+}
+
+const KNOWN_LAYOUTS: [KnownLayout; 3] = [
+    // ArduPilot log171 extract: one or more IMUs.
+    KnownLayout {
+        names: [
+            "imu{k}_accel_x_m_s2",
+            "imu{k}_accel_y_m_s2",
+            "imu{k}_accel_z_m_s2",
+            "imu{k}_gyro_x_rad_s",
+            "imu{k}_gyro_y_rad_s",
+            "imu{k}_gyro_z_rad_s",
+        ],
+        accel_scale: 1.0,
+        gyro_scale: 1.0,
+        signs: [1.0; 6],
+    },
+    // PX4 sensor_combined extract.
+    KnownLayout {
+        names: [
             "accel_x_m_s2",
             "accel_y_m_s2",
             "accel_z_m_s2",
             "gyro_x_rad_s",
             "gyro_y_rad_s",
             "gyro_z_rad_s",
-        ]
-        .map(|c| format!("imu{k}_{c}"));
-        match names.iter().map(|n| find(n)).collect::<Option<Vec<_>>>() {
-            Some(v) => columns.push([v[0], v[1], v[2], v[3], v[4], v[5]]),
-            None => break,
-        }
-    }
-    if !columns.is_empty() {
-        return Some(ImuLayout {
-            columns,
-            accel_scale: 1.0,
-            gyro_scale: 1.0,
-            signs: [1.0; 6],
-        });
-    }
-    // accel_x_m_s2 … (PX4 sensor_combined extract).
-    let plain = [
-        "accel_x_m_s2",
-        "accel_y_m_s2",
-        "accel_z_m_s2",
-        "gyro_x_rad_s",
-        "gyro_y_rad_s",
-        "gyro_z_rad_s",
-    ];
-    if let Some(v) = plain.iter().map(|n| find(n)).collect::<Option<Vec<_>>>() {
-        return Some(ImuLayout {
-            columns: vec![[v[0], v[1], v[2], v[3], v[4], v[5]]],
-            accel_scale: 1.0,
-            gyro_scale: 1.0,
-            signs: [1.0; 6],
-        });
-    }
+        ],
+        accel_scale: 1.0,
+        gyro_scale: 1.0,
+        signs: [1.0; 6],
+    },
     // x-io (Fusion example): g and deg/s, z up (gravity reads +1 g at rest):
     // x forward, y left, z up → FRD is a half turn about x.
-    let xio = [
-        "Accelerometer X (g)",
-        "Accelerometer Y (g)",
-        "Accelerometer Z (g)",
-        "Gyroscope X (deg/s)",
-        "Gyroscope Y (deg/s)",
-        "Gyroscope Z (deg/s)",
-    ];
-    if let Some(v) = xio.iter().map(|n| find(n)).collect::<Option<Vec<_>>>() {
-        return Some(ImuLayout {
-            columns: vec![[v[0], v[1], v[2], v[3], v[4], v[5]]],
-            accel_scale: 9.80665,
-            gyro_scale: std::f64::consts::PI / 180.0,
-            signs: [1.0, -1.0, -1.0, 1.0, -1.0, -1.0],
-        });
-    }
-    None
+    KnownLayout {
+        names: [
+            "Accelerometer X (g)",
+            "Accelerometer Y (g)",
+            "Accelerometer Z (g)",
+            "Gyroscope X (deg/s)",
+            "Gyroscope Y (deg/s)",
+            "Gyroscope Z (deg/s)",
+        ],
+        accel_scale: 9.80665,
+        gyro_scale: std::f64::consts::PI / 180.0,
+        signs: [1.0, -1.0, -1.0, 1.0, -1.0, -1.0],
+    },
+];
+
+fn imu_layout(headers: &csv::StringRecord) -> Option<ImuLayout> {
+    let find = |name: &str| headers.iter().position(|h| h.trim() == name);
+    KNOWN_LAYOUTS.iter().find_map(|l| {
+        let per_instance = l.names.iter().any(|n| n.contains("{k}"));
+        let mut columns = Vec::new();
+        for k in 0..if per_instance { usize::MAX } else { 1 } {
+            let idx = l.names.map(|n| find(&n.replace("{k}", &k.to_string())));
+            match idx {
+                [Some(a), Some(b), Some(c), Some(d), Some(e), Some(f)] => {
+                    columns.push([a, b, c, d, e, f]);
+                }
+                _ => break,
+            }
+        }
+        (!columns.is_empty()).then_some(ImuLayout {
+            columns,
+            accel_scale: l.accel_scale,
+            gyro_scale: l.gyro_scale,
+            signs: l.signs,
+        })
+    })
 }
 
-fn read_table(path: &Path) -> Result<(csv::StringRecord, Vec<csv::StringRecord>)> {
+/// Opens a CSV (cells trimmed) and reads its header row; errors name the file.
+pub fn open_csv(path: &Path) -> Result<(csv::Reader<std::fs::File>, csv::StringRecord)> {
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_path(path)
@@ -414,6 +431,11 @@ fn read_table(path: &Path) -> Result<(csv::StringRecord, Vec<csv::StringRecord>)
         .headers()
         .with_context(|| format!("{}: no header row", path.display()))?
         .clone();
+    Ok((rdr, headers))
+}
+
+fn read_table(path: &Path) -> Result<(csv::StringRecord, Vec<csv::StringRecord>)> {
+    let (mut rdr, headers) = open_csv(path)?;
     let mut rows = Vec::new();
     for (i, r) in rdr.records().enumerate() {
         rows.push(r.with_context(|| format!("{}: bad CSV at line {}", path.display(), i + 2))?);
@@ -525,12 +547,9 @@ pub fn csv_extracts_to_replay_csv(
             let a = match (cell(r, q[0]), cell(r, q[1]), cell(r, q[2]), cell(r, q[3])) {
                 (Some(w), Some(x), Some(y), Some(z)) => Some(quaternion_to_euler([w, x, y, z])),
                 _ => match (cell(r, e[0]), cell(r, e[1]), cell(r, e[2])) {
-                    (Some(ro), Some(pi), Some(ya)) => Some([
-                        ro * deg,
-                        pi * deg,
-                        (ya * deg + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
-                            - std::f64::consts::PI,
-                    ]),
+                    (Some(ro), Some(pi), Some(ya)) => {
+                        Some([ro * deg, pi * deg, wrap_pi_f64(ya * deg)])
+                    }
                     _ => None,
                 },
             };

@@ -327,6 +327,18 @@ pub struct HardwareDetection {
     pub other_channel_samples: usize,
 }
 
+impl HardwareDetection {
+    /// Seconds from onset to the first sign of the fault, health flag or
+    /// channel flag, whichever came first.
+    pub fn first_seen(&self) -> Option<f64> {
+        let health = self.first_health.as_ref().map(|(s, _)| *s);
+        match (health, self.first_flag) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+}
+
 fn health_names(h: &imu_fdi::monitor::Health) -> String {
     let mut v = Vec::new();
     for (on, name) in [

@@ -32,11 +32,7 @@ pub struct ImuLog {
 /// Reads a SPEC §10 CSV with `imu{k}_…` columns (k = 0, 1, …). Errors name
 /// the file and line; rows with non-increasing `t` are skipped and counted.
 pub fn read_imu_log(path: &Path) -> Result<ImuLog> {
-    let mut rdr = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_path(path)
-        .with_context(|| format!("cannot read {}", path.display()))?;
-    let headers = rdr.headers()?.clone();
+    let (mut rdr, headers) = crate::log_import::open_csv(path)?;
     let find = |name: &str| headers.iter().position(|h| h == name);
     let t_col = find("t").with_context(|| format!("{}: no `t` column", path.display()))?;
     let mut cols: Vec<[usize; 6]> = Vec::new();

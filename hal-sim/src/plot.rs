@@ -40,6 +40,20 @@ fn unit(ch: usize) -> (&'static str, f64) {
 /// One panel per channel: named series of (t, value) with colours.
 type Series = Vec<(String, RGBColor, Vec<(f64, f64)>)>;
 
+/// A white drawing area with `title` on top; returns the area below it.
+fn titled<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    font_size: u32,
+) -> Result<DrawingArea<DB, Shift>>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE).map_err(|e| anyhow!("{e:?}"))?;
+    root.titled(title, ("sans-serif", font_size))
+        .map_err(|e| anyhow!("{e:?}"))
+}
+
 fn grid<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
@@ -48,10 +62,7 @@ fn grid<DB: DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    root.fill(&WHITE).map_err(|e| anyhow!("{e:?}"))?;
-    let root = root
-        .titled(title, ("sans-serif", 20))
-        .map_err(|e| anyhow!("{e:?}"))?;
+    let root = titled(root, title, 20)?;
     let areas = root.split_evenly((3, 2));
     for (area, (name, series)) in areas.iter().zip(panels.iter()) {
         let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
@@ -301,10 +312,7 @@ fn parity_figure<DB: DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    root.fill(&WHITE).map_err(|e| anyhow!("{e:?}"))?;
-    let root = root
-        .titled(title, ("sans-serif", 18))
-        .map_err(|e| anyhow!("{e:?}"))?;
+    let root = titled(root, title, 18)?;
     let (left, right) = root.split_horizontally(SIZE.0 / 2);
     let lim = before
         .iter()

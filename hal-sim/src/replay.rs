@@ -190,14 +190,7 @@ pub fn replay(
     sim_cfg: impl Fn(AidingKind) -> UkfMonitorConfig<f64>,
     opts: &ReplayOptions,
 ) -> Result<ReplaySummary> {
-    let mut rdr = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_path(input)
-        .with_context(|| format!("cannot open {}", input.display()))?;
-    let headers = rdr
-        .headers()
-        .with_context(|| format!("{}: no header row", input.display()))?
-        .clone();
+    let (mut rdr, headers) = crate::log_import::open_csv(input)?;
     let col: HashMap<&str, usize> = headers.iter().enumerate().map(|(i, h)| (h, i)).collect();
     let find = |name: &str| col.get(name).copied();
     let t_idx = find("t").with_context(|| format!("{}: missing column 't'", input.display()))?;

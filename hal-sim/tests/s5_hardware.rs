@@ -25,11 +25,7 @@ fn s5_hardware_faults_are_seen_and_a_dropout_is_ridden_through() {
         let ds = hardware_detections(&t);
         assert_eq!(ds.len(), 6);
         for (i, d) in ds.iter().enumerate() {
-            let first = match (d.first_health.as_ref().map(|(s, _)| *s), d.first_flag) {
-                (Some(a), Some(b)) => Some(a.min(b)),
-                (a, b) => a.or(b),
-            };
-            if let Some(s) = first {
+            if let Some(s) = d.first_seen() {
                 seen[i] += 1;
                 delay_max[i] = delay_max[i].max(s);
             }

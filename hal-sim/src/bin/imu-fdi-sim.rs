@@ -430,16 +430,7 @@ fn campaign(scn: &Scenario, first: u64, seeds: u64, opts: &RunOptions) -> Result
 /// column (or cannot be read: `replay` then reports it); false for a CSV
 /// extract that `convert` maps.
 fn has_time_column(path: &std::path::Path) -> bool {
-    let Ok(mut r) = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_path(path)
-    else {
-        return true;
-    };
-    match r.headers() {
-        Ok(h) => h.iter().any(|c| c == "t"),
-        Err(_) => true,
-    }
+    hal_sim::log_import::open_csv(path).map_or(true, |(_, h)| h.iter().any(|c| c == "t"))
 }
 
 /// The S5 table: how each hardware fault row was seen over the seeds.
@@ -463,16 +454,7 @@ fn print_hardware(scn: &Scenario, first: u64, seeds: u64, opts: &RunOptions) -> 
     out!("  fault                  ch  interval s     seen  delay mean/max s  by health  other-channel flag samples");
     for ds in &per_row {
         let Some(d0) = ds.first() else { continue };
-        let delays: Vec<f64> = ds
-            .iter()
-            .filter_map(|d| {
-                let h = d.first_health.as_ref().map(|(s, _)| *s);
-                match (h, d.first_flag) {
-                    (Some(a), Some(b)) => Some(a.min(b)),
-                    (a, b) => a.or(b),
-                }
-            })
-            .collect();
+        let delays: Vec<f64> = ds.iter().filter_map(|d| d.first_seen()).collect();
         let by_health = ds.iter().filter(|d| d.first_health.is_some()).count();
         let other: usize = ds.iter().map(|d| d.other_channel_samples).sum();
         let (mean, max) = if delays.is_empty() {
