@@ -54,7 +54,11 @@ fn two_stage_equals_the_augmented_kalman_filter() {
     let mut qa = M12::zeros();
     qa.fixed_view_mut::<6, 6>(0, 0).copy_from(&qx);
     qa.fixed_view_mut::<6, 6>(6, 6).copy_from(&qf);
-    let mut gate = Gate::<f64, 6>::new(0.0, 0);
+    // A 1σ gate that never rejects (no rejections allowed): every channel
+    // is fused and its test ratio ν²/σ² is reported, to compare with the
+    // augmented filter's normalised innovation.
+    let mut gate = Gate::<f64, 6>::new(1.0, 0);
+    let mut worst_gate = 0.0f64;
     let (mut worst_x, mut worst_f, mut worst_px, mut worst_pf) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     let truth_f = V6::new(0.3, -0.1, 0.2, 0.01, -0.02, 0.005);
     let mut truth = x0;
@@ -115,16 +119,17 @@ fn two_stage_equals_the_augmented_kalman_filter() {
             });
             let z = h * truth + V6::from_fn(|i, _| uniform(1.0) * r[i].sqrt());
             let avail = [true, true, k % 30 != 9, true, true, true];
-            ts.update(
-                &z,
-                &avail,
-                |s| Ok::<_, ()>(h * s),
-                &h,
-                &r,
-                &[false; 6],
-                &mut gate,
-            )
-            .unwrap();
+            let out = ts
+                .update(
+                    &z,
+                    &avail,
+                    |s| Ok::<_, ()>(h * s),
+                    &h,
+                    &r,
+                    &[false; 6],
+                    &mut gate,
+                )
+                .unwrap();
             // Augmented update; a missing channel is a zero row of H with
             // unit noise and zero measurement (no information).
             let mut ha = SMatrix::<f64, 6, 12>::zeros();
@@ -142,6 +147,15 @@ fn two_stage_equals_the_augmented_kalman_filter() {
             let s = ha * pa * ha.transpose() + rr;
             let kgain = pa * ha.transpose() * s.try_inverse().unwrap();
             let innovation = zz - ha * xa;
+            // The gate tests what the augmented filter would: its innovation
+            // against its innovation variance.
+            for i in 0..6 {
+                if avail[i] {
+                    let want = innovation[i] * innovation[i] / s[(i, i)];
+                    let got = out.bias_free.diag[i].test_ratio;
+                    worst_gate = worst_gate.max(rel((got - want).abs(), want.max(1e-3)));
+                }
+            }
             xa += kgain * innovation;
             pa -= kgain * s * kgain.transpose();
             pa = (pa + pa.transpose()) * 0.5;
@@ -165,9 +179,10 @@ fn two_stage_equals_the_augmented_kalman_filter() {
         worst_pf = worst_pf.max(rel((pf - pfa).amax(), pfa.amax()));
     }
     println!(
-        "two-stage vs augmented KF over 10^4 steps: state {worst_x:.2e}, fault {worst_f:.2e}, P^x {worst_px:.2e}, P^f {worst_pf:.2e} (relative)"
+        "two-stage vs augmented KF over 10^4 steps: state {worst_x:.2e}, fault {worst_f:.2e}, P^x {worst_px:.2e}, P^f {worst_pf:.2e}, gate ratio {worst_gate:.2e} (relative)"
     );
     assert!(worst_x < 1e-9 && worst_f < 1e-9 && worst_px < 1e-9 && worst_pf < 1e-9);
+    assert!(worst_gate < 1e-6, "{worst_gate}");
     // And the fault is actually estimated.
     assert!((ts.fault() - truth_f).amax() < 0.05, "{:?}", ts.fault());
 }

@@ -3,6 +3,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
+use super::ukf::GateShift;
 use super::{Gate, SigmaParams, Ukf, UkfError, UpdateOutput};
 use crate::math::{cholesky, cholesky_solve_right, symmetrize, wrap_pi, Real};
 
@@ -192,11 +193,25 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
         let mut x_full = self.bias_free.state() + self.u * self.fault;
         wrap_angles(&mut x_full, &self.angles);
         let mut s = hjac * self.u;
-        let mut z_mod = z + s * self.fault;
+        let signature = s * self.fault;
+        let mut z_mod = z + signature;
         wrap_angles(&mut z_mod, meas_angles);
-        let out =
-            self.bias_free
-                .update_delayed(&x_full, &z_mod, available, h, r, meas_angles, gate)?;
+        // Gate what the augmented filter would: the full innovation, with
+        // the fault's uncertainty in its variance.
+        let shift = GateShift {
+            innovation_offset: signature,
+            extra_variance: (s * self.pf * s.transpose()).diagonal(),
+        };
+        let out = self.bias_free.update_delayed_gated(
+            &x_full,
+            &z_mod,
+            available,
+            h,
+            r,
+            meas_angles,
+            gate,
+            &shift,
+        )?;
         let mut rbar = SVector::<T, M>::zeros();
         for (i, d) in out.diag.iter().enumerate() {
             if d.fused {

@@ -277,7 +277,7 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         gate: &mut Gate<T, M>,
     ) -> Result<UpdateOutput<T, N, M>, UkfError<E>> {
         let center = self.x;
-        self.update_about(&center, z, available, h, r, meas_angles, gate)
+        self.update_about(&center, z, available, h, r, meas_angles, gate, None)
     }
 
     /// Update with a measurement that was taken when the state was
@@ -298,7 +298,25 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         meas_angles: &[bool; M],
         gate: &mut Gate<T, M>,
     ) -> Result<UpdateOutput<T, N, M>, UkfError<E>> {
-        self.update_about(delayed, z, available, h, r, meas_angles, gate)
+        self.update_about(delayed, z, available, h, r, meas_angles, gate, None)
+    }
+
+    /// [`update_delayed`](Self::update_delayed) with the outlier gate
+    /// applied to a different innovation than the one fused (see
+    /// [`GateShift`]).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn update_delayed_gated<const M: usize, E>(
+        &mut self,
+        delayed: &SVector<T, N>,
+        z: &SVector<T, M>,
+        available: &[bool; M],
+        h: impl FnMut(&SVector<T, N>) -> Result<SVector<T, M>, E>,
+        r: &SVector<T, M>,
+        meas_angles: &[bool; M],
+        gate: &mut Gate<T, M>,
+        shift: &GateShift<T, M>,
+    ) -> Result<UpdateOutput<T, N, M>, UkfError<E>> {
+        self.update_about(delayed, z, available, h, r, meas_angles, gate, Some(shift))
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -311,6 +329,7 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         r: &SVector<T, M>,
         meas_angles: &[bool; M],
         gate: &mut Gate<T, M>,
+        shift: Option<&GateShift<T, M>>,
     ) -> Result<UpdateOutput<T, N, M>, UkfError<E>> {
         let (l, failure) = self.factor();
         let chi = self.sigma_points(center, &l);
@@ -329,8 +348,18 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         }
         // Not generic over the model's error type, so one copy of the
         // correction serves both update forms.
-        self.correct(z, &z_hat, pzz, pxz, available, meas_angles, gate, failure)
-            .map_err(UkfError::widen)
+        self.correct(
+            z,
+            &z_hat,
+            pzz,
+            pxz,
+            available,
+            meas_angles,
+            gate,
+            shift,
+            failure,
+        )
+        .map_err(UkfError::widen)
     }
 
     /// Update with a measurement that is affine in the state,
@@ -375,7 +404,17 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
             }
         }
         symmetrize(&mut pzz);
-        self.correct(z, z_center, pzz, pxz, available, meas_angles, gate, None)
+        self.correct(
+            z,
+            z_center,
+            pzz,
+            pxz,
+            available,
+            meas_angles,
+            gate,
+            None,
+            None,
+        )
     }
 
     /// The Kalman correction shared by both update forms.
@@ -389,6 +428,7 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         available: &[bool; M],
         meas_angles: &[bool; M],
         gate: &mut Gate<T, M>,
+        shift: Option<&GateShift<T, M>>,
         failure: Option<LinalgError>,
     ) -> Result<UpdateOutput<T, N, M>, UkfError<core::convert::Infallible>> {
         let nu_all = diff(z, z_hat, meas_angles);
@@ -400,7 +440,18 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
             }
             let s = pzz.get((i, i)).copied().unwrap_or_else(T::one);
             let innovation = nu_all.get(i).copied().unwrap_or_else(T::zero);
-            let ratio = gate.ratio(innovation, s);
+            let ratio = match shift {
+                None => gate.ratio(innovation, s),
+                Some(g) => {
+                    let offset = g.innovation_offset.get(i).copied().unwrap_or_else(T::zero);
+                    let extra = g.extra_variance.get(i).copied().unwrap_or_else(T::zero);
+                    let mut gated = innovation - offset;
+                    if meas_angles.get(i).copied().unwrap_or(false) {
+                        gated = wrap_pi(gated);
+                    }
+                    gate.ratio(gated, s + extra)
+                }
+            };
             let fused = innovation.finite() && s > T::zero() && gate.admit(i, ratio);
             *d = ChannelDiag {
                 available: true,
@@ -449,4 +500,18 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
             covariance_reset: failure,
         })
     }
+}
+
+/// What the outlier gate tests when it is not the innovation being fused:
+/// `ν − innovation_offset` against `P_zz + extra_variance` per channel. The
+/// two-stage filter fuses the bias-free innovation `r̄ = z − h(x̄)`, whose
+/// mean is the fault's signature `S f̂` and whose spread lacks the fault's
+/// `S P^f Sᵀ`; gating `r̄` itself rejects good measurements exactly when a
+/// fault appears, so it gates the full innovation `z − h(x̄ + U f̂)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct GateShift<T: Real, const M: usize> {
+    /// Subtracted from the innovation before gating.
+    pub innovation_offset: SVector<T, M>,
+    /// Added to the innovation variance before gating.
+    pub extra_variance: SVector<T, M>,
 }

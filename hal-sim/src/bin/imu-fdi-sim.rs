@@ -269,9 +269,28 @@ enum Cmd {
         #[arg(long)]
         f32: bool,
         /// Q^f multiplier while a fault is tracked (1 = no adaptation: the
-        /// augmented UKF's fixed Q^f, for a like-for-like comparison).
+        /// augmented UKF's fixed Q^f, for a like-for-like comparison): one
+        /// value for every channel or six (a_x a_y a_z p q r).
+        #[arg(long, value_delimiter = ',')]
+        adapt_gain: Option<Vec<f64>>,
+        /// Standardised move of one update that starts the adaptation.
         #[arg(long)]
-        adapt_gain: Option<f64>,
+        adapt_k: Option<f64>,
+        /// How long the adaptation holds, s.
+        #[arg(long)]
+        adapt_hold: Option<f64>,
+        /// The adaptation also holds while |f̂ − b| ≥ this many σ_f
+        /// (0: only sudden moves start it).
+        #[arg(long)]
+        adapt_level: Option<f64>,
+        /// Multiplier of the accelerometer and gyro fault random walk Q^f
+        /// (both filters), e.g. `1,3`.
+        #[arg(long, value_delimiter = ',', num_args = 2, value_names = ["ACCEL", "GYRO"])]
+        qf_scale: Option<Vec<f64>>,
+        /// Run the scenario with its fault table removed: the fault rows
+        /// are then empty and the last row gives the estimates' noise.
+        #[arg(long)]
+        fault_free: bool,
     },
     /// Run a scenario over seeds and print the per-channel table: a built-in
     /// (s1, s2, s3, s3-paper, s5, auv-hour, aircraft-hour; s4 runs the parity
@@ -1081,11 +1100,22 @@ fn main() -> Result<()> {
             augmented,
             f32,
             adapt_gain,
+            adapt_k,
+            adapt_hold,
+            adapt_level,
+            qf_scale,
+            fault_free,
         } => {
             use hal_sim::ots::{
                 otsukf_config, run_augmented, run_otsukf, RmseAccumulator, Setting, PAPER_RMSE,
             };
-            let scn = scenario(&name)?;
+            use imu_fdi::math::Real;
+            use imu_fdi::model::ImuVec;
+            use imu_fdi::monitor::OtsukfConfig;
+            let mut scn = scenario(&name)?;
+            if fault_free {
+                scn.faults.clear();
+            }
             if seeds == 0 {
                 return Err(anyhow!("--seeds must be at least 1"));
             }
@@ -1094,27 +1124,83 @@ fn main() -> Result<()> {
             } else {
                 Setting::Realistic
             };
+            let qf = match qf_scale.as_deref() {
+                None => [1.0, 1.0],
+                Some([a, g]) if *a > 0.0 && *g > 0.0 => [*a, *g],
+                Some(_) => return Err(anyhow!("--qf-scale needs two positive numbers")),
+            };
+            // The paper's or realistic tuning with the command line's
+            // changes; the augmented UKF gets the same Q^f.
+            fn tuned<T: Real>(
+                scn: &hal_sim::Scenario,
+                setting: Setting,
+                qf: [f64; 2],
+                gain: Option<ImuVec<f64>>,
+                k: Option<f64>,
+                hold: Option<f64>,
+                level: Option<f64>,
+            ) -> OtsukfConfig<T> {
+                let mut c = otsukf_config::<T>(scn, setting);
+                for (i, q) in c.fault_psd.iter_mut().enumerate() {
+                    *q *= T::lit(if i < 3 { qf[0] } else { qf[1] });
+                }
+                if let Some(g) = gain {
+                    c.adapt_gain = g.map(T::lit);
+                }
+                if let Some(k) = k {
+                    c.adapt_k = T::lit(k);
+                }
+                if let Some(h) = hold {
+                    c.adapt_hold_s = T::lit(h);
+                }
+                match level {
+                    Some(l) if l > 0.0 => c.adapt_level = Some(T::lit(l)),
+                    Some(_) => c.adapt_level = None,
+                    None => {}
+                }
+                c
+            }
+            let adapt_gain = match adapt_gain.as_deref() {
+                None => None,
+                Some(g) if g.iter().any(|v| !v.is_finite() || *v < 1.0) => {
+                    return Err(anyhow!("--adapt-gain values must be at least 1"))
+                }
+                Some([g]) => Some(ImuVec::from_element(*g)),
+                Some(g) if g.len() == 6 => Some(ImuVec::from_row_slice(g)),
+                Some(_) => return Err(anyhow!("--adapt-gain takes one value or six")),
+            };
             let (mut two, mut aug) = (RmseAccumulator::default(), RmseAccumulator::default());
             let mut false_flags = 0u64;
             for seed in first_seed..first_seed + seeds {
                 let (acc, ff) = if f32 {
-                    let mut c = otsukf_config::<f32>(&scn, setting);
-                    if let Some(g) = adapt_gain {
-                        c.adapt_gain = g as f32;
-                    }
+                    let c = tuned::<f32>(
+                        &scn,
+                        setting,
+                        qf,
+                        adapt_gain,
+                        adapt_k,
+                        adapt_hold,
+                        adapt_level,
+                    );
                     run_otsukf::<f32>(&scn, seed, c)
                 } else {
-                    let mut c = otsukf_config::<f64>(&scn, setting);
-                    if let Some(g) = adapt_gain {
-                        c.adapt_gain = g;
-                    }
+                    let c = tuned::<f64>(
+                        &scn,
+                        setting,
+                        qf,
+                        adapt_gain,
+                        adapt_k,
+                        adapt_hold,
+                        adapt_level,
+                    );
                     run_otsukf::<f64>(&scn, seed, c)
                 }
                 .ok_or_else(|| anyhow!("the two-stage monitor refused its configuration"))?;
                 two.merge(&acc);
                 false_flags += ff;
                 if augmented {
-                    let a = run_augmented(&scn, seed, &otsukf_config::<f64>(&scn, setting))
+                    let c = tuned::<f64>(&scn, setting, qf, None, None, None, None);
+                    let a = run_augmented(&scn, seed, &c)
                         .ok_or_else(|| anyhow!("augmented UKF failed"))?;
                     aug.merge(&a);
                 }
@@ -1154,6 +1240,15 @@ fn main() -> Result<()> {
                         "",
                         PAPER_RMSE[i]
                     );
+                }
+            }
+            let (q2, qa) = (two.quiet_rms(), aug.quiet_rms());
+            out!("fault-free noise: RMS of each fault estimate before its channel's first fault");
+            for c in 0..6 {
+                if augmented {
+                    out!("{:<6} {:>12.4} {:>12.4}", names[6 + c], q2[c], qa[c]);
+                } else {
+                    out!("{:<6} {:>12.4}", names[6 + c], q2[c]);
                 }
             }
             out!("false flags (monitoring samples flagged on a channel without a fault in the last 2 s): {false_flags}");
