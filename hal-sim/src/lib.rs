@@ -14,6 +14,7 @@ pub mod baseline;
 pub mod emulated_icm42688;
 pub mod fault;
 pub mod imu_model;
+pub mod ots;
 #[cfg(all(target_os = "none", feature = "sil"))]
 pub mod qemu;
 pub mod scenario;
@@ -34,8 +35,6 @@ pub mod inject;
 pub mod log_import;
 #[cfg(feature = "std")]
 pub mod metrics;
-#[cfg(feature = "std")]
-pub mod ots;
 #[cfg(feature = "std")]
 pub mod parity_replay;
 #[cfg(feature = "std")]

@@ -109,7 +109,7 @@ impl RmseAccumulator {
             let r = if self.quiet_n[c] == 0 {
                 f64::NAN
             } else {
-                (self.quiet_sum[c] / self.quiet_n[c] as f64).sqrt()
+                libm::sqrt(self.quiet_sum[c] / self.quiet_n[c] as f64)
             };
             if c >= 3 {
                 r.to_degrees()
@@ -125,7 +125,7 @@ impl RmseAccumulator {
             let r = if self.n[i] == 0 {
                 f64::NAN
             } else {
-                (self.sum[i] / self.n[i] as f64).sqrt()
+                libm::sqrt(self.sum[i] / self.n[i] as f64)
             };
             if (3..6).contains(&i) || i >= 9 {
                 r.to_degrees()
@@ -347,7 +347,7 @@ pub fn run_augmented_traced(
             t: s.t,
             state,
             fault,
-            fault_sigma: core::array::from_fn(|i| p[(6 + i, 6 + i)].max(0.0).sqrt()),
+            fault_sigma: core::array::from_fn(|i| libm::sqrt(p[(6 + i, 6 + i)].max(0.0))),
         });
     }
     Some(acc)

@@ -13,7 +13,7 @@
 use std::fmt::Write as _;
 
 use hal_sim::target_checks::{
-    monitor_run, monitor_scenarios, spd6, ANGLES, SQRT_INPUTS, T_QUANTILES,
+    monitor_run, monitor_scenarios, otsukf_run, spd6, ANGLES, SQRT_INPUTS, T_QUANTILES,
 };
 use imu_fdi::math::cholesky;
 use imu_fdi::stats::student_t_upper_quantile;
@@ -46,6 +46,13 @@ fn expectations() -> String {
         for i in 0..6 {
             writeln!(s, "monitor {name} {i} {:e} {:e}", x[i], sd[i]).unwrap();
         }
+    }
+    let (f, sd) = otsukf_run::<f64>(|step| {
+        step();
+    })
+    .unwrap();
+    for i in 0..6 {
+        writeln!(s, "otsukf {i} {:e} {:e}", f[i], sd[i]).unwrap();
     }
     s
 }
@@ -81,4 +88,17 @@ fn host_f32_runs_meet_the_target_tolerance() {
         println!("{name}: f32 vs f64 state after the run, largest {worst:.4} sigma");
         assert!(worst < 0.1, "{name}: {worst}");
     }
+    let (f64_, sd) = otsukf_run::<f64>(|step| {
+        step();
+    })
+    .unwrap();
+    let (f32_, _) = otsukf_run::<f32>(|step| {
+        step();
+    })
+    .unwrap();
+    let worst = (0..6)
+        .map(|i| (f64::from(f32_[i]) - f64_[i]).abs() / sd[i])
+        .fold(0.0, f64::max);
+    println!("otsukf s3: f32 vs f64 fault estimate after the run, largest {worst:.4} sigma");
+    assert!(worst < 0.1, "otsukf: {worst}");
 }

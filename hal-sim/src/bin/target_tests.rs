@@ -14,7 +14,7 @@
 use cortex_m_rt::{entry, exception, ExceptionFrame};
 use cortex_m_semihosting::{debug, hprintln};
 use hal_sim::target_checks::{
-    monitor_run, monitor_scenarios, spd6, ANGLES, SQRT_INPUTS, T_QUANTILES,
+    monitor_run, monitor_scenarios, otsukf_run, spd6, ANGLES, SQRT_INPUTS, T_QUANTILES,
 };
 use imu_fdi::detect::TTest;
 use imu_fdi::math::{cholesky, sin_cos_f32, sqrt_f32};
@@ -145,6 +145,41 @@ fn monitor_matches_f64(name: &str) -> Result<(), &'static str> {
     Ok(())
 }
 
+/// The two-stage UKF monitor on S3 in `f32` (13 sigma points, GNSS
+/// velocity + attitude, the fault filter): its fault estimate after 15 s
+/// (monitoring from 8 s, faults from 10 s) within 0.1 σ_f of the host's
+/// `f64`; prints the instruction cost of its monitoring steps.
+fn otsukf_s3_matches_f64() -> Result<(), &'static str> {
+    use imu_fdi::monitor::{OtsukfMonitor, Phase};
+    let (mut sum, mut n, mut max) = (0u64, 0u64, 0u32);
+    let (f, _) = otsukf_run::<f32>(|step| {
+        let t0 = instructions();
+        let phase = core::hint::black_box(step());
+        let c = instructions().wrapping_sub(t0);
+        if phase == Phase::Monitoring {
+            sum += u64::from(c);
+            n += 1;
+            max = max.max(c);
+        }
+    })
+    .ok_or("two-stage monitor refused the configuration")?;
+    hprintln!(
+        "two-stage UKF monitor (f32, S3 seed 1): per monitoring step mean {} max {} instructions; size {} bytes",
+        sum / n.max(1),
+        max,
+        core::mem::size_of::<OtsukfMonitor<f32>>()
+    );
+    for i in 0..6 {
+        let [want, sigma] =
+            expected::<2>("otsukf", &[itoa_buf(i).as_str()]).ok_or("missing expectation")?;
+        let err = (f64::from(f[i]) - want).abs();
+        if err > 0.1 * sigma || !err.is_finite() {
+            return Err("f32 fault estimate differs from the host's f64 by more than 0.1 sigma");
+        }
+    }
+    Ok(())
+}
+
 /// S4 on the target: the cone6 parity monitor in `f32` detects and isolates
 /// the 0.5 °/s bias on sensor 5, with no alarm before it; prints the
 /// instruction cost per step.
@@ -217,6 +252,7 @@ fn main() -> ! {
         "monitor_aircraft_matches_f64",
         monitor_matches_f64("aircraft"),
     );
+    r.check("otsukf_s3_matches_f64", otsukf_s3_matches_f64());
     r.check("parity_s4_on_target", parity_s4_on_target());
     profile();
     hprintln!("on-target tests: {} passed, {} failed", r.passed, r.failed);
