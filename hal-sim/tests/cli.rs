@@ -152,6 +152,30 @@ fn otsukf_prints_the_rmse_table_beside_the_paper() {
         .unwrap();
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--seeds must be at least 1"));
+    for (args, why) in [
+        (&["--shape", "F9"][..], "expected F1, F2 or F3"),
+        (&["--adapt-gain", "0.5"][..], "at least 1"),
+        (&["--adapt-gain", "2,2"][..], "one value or six"),
+        (&["--qf-scale", "1,-1"][..], "two positive numbers"),
+    ] {
+        let bad = bin()
+            .args(["otsukf", "s3", "--seeds", "1"])
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(!bad.status.success(), "{args:?}");
+        let err = String::from_utf8_lossy(&bad.stderr);
+        assert!(err.contains(why), "{args:?}: {err}");
+    }
+    // Without faults the RMSE rows are empty and the noise rows are not:
+    // the adapted paper-setting estimate stays near its fixed-Q^f noise
+    // (0.019 over seeds 100–119).
+    let text = bin_cmd_output(&["otsukf", "s3-paper", "--seeds", "1", "--fault-free"]);
+    let rows: Vec<&str> = text.lines().filter(|l| l.starts_with("f_p")).collect();
+    assert_eq!(rows.len(), 2, "{text}");
+    assert!(rows[0].contains("NaN"), "{text}");
+    let noise: f64 = rows[1].split_whitespace().nth(1).unwrap().parse().unwrap();
+    assert!(noise > 0.01 && noise < 0.025, "{text}");
 }
 
 #[test]

@@ -285,12 +285,20 @@ enum Cmd {
         adapt_level: Option<f64>,
         /// Multiplier of the accelerometer and gyro fault random walk Q^f
         /// (both filters), e.g. `1,3`.
-        #[arg(long, value_delimiter = ',', num_args = 2, value_names = ["ACCEL", "GYRO"])]
+        #[arg(
+            long,
+            value_delimiter = ',',
+            value_name = "ACCEL,GYRO",
+            allow_negative_numbers = true
+        )]
         qf_scale: Option<Vec<f64>>,
         /// Run the scenario with its fault table removed: the fault rows
         /// are then empty and the last row gives the estimates' noise.
         #[arg(long)]
         fault_free: bool,
+        /// Keep only the fault rows of one shape (F1 step, F2 ramp, F3 sine).
+        #[arg(long)]
+        shape: Option<String>,
     },
     /// Run a scenario over seeds and print the per-channel table: a built-in
     /// (s1, s2, s3, s3-paper, s5, auv-hour, aircraft-hour; s4 runs the parity
@@ -1105,6 +1113,7 @@ fn main() -> Result<()> {
             adapt_level,
             qf_scale,
             fault_free,
+            shape,
         } => {
             use hal_sim::ots::{
                 otsukf_config, run_augmented, run_otsukf, RmseAccumulator, Setting, PAPER_RMSE,
@@ -1115,6 +1124,15 @@ fn main() -> Result<()> {
             let mut scn = scenario(&name)?;
             if fault_free {
                 scn.faults.clear();
+            }
+            if let Some(shape) = shape.as_deref() {
+                let kind = match shape.to_ascii_uppercase().as_str() {
+                    "F1" => hal_sim::FaultKind::F1,
+                    "F2" => hal_sim::FaultKind::F2,
+                    "F3" => hal_sim::FaultKind::F3,
+                    other => return Err(anyhow!("--shape {other}: expected F1, F2 or F3")),
+                };
+                scn.faults.retain(|r| r.kind == kind);
             }
             if seeds == 0 {
                 return Err(anyhow!("--seeds must be at least 1"));
