@@ -42,6 +42,22 @@ pub fn spd6<T: Real>() -> Mat6<T> {
 /// Steps of each monitor run.
 pub const MONITOR_STEPS: usize = 1500;
 
+/// A simulated sample as the monitor's input, rounded to `f32` first on
+/// both sides so that the host's `f64` run and the target's `f32` run
+/// differ only in the filter's arithmetic.
+fn rounded_to_f32<T: Real>(s: &crate::SimSample) -> (ImuVec<T>, T, Measurement<T>) {
+    let u = ImuVec::from_fn(|i, _| {
+        s.imu
+            .map_or(T::lit(f64::NAN), |v| T::lit(f64::from(v[i] as f32)))
+    });
+    let z = MeasVec::from_fn(|i, _| T::lit(f64::from(s.aiding[i] as f32)));
+    let m = Measurement {
+        z,
+        available: s.aiding_available,
+    };
+    (u, T::lit(f64::from(s.dt as f32)), m)
+}
+
 /// Runs the UKF monitor in `T` over the first [`MONITOR_STEPS`] IMU periods
 /// of `scn` (seed 1) and returns its state and state standard deviations.
 /// Returns `None` if the configuration is refused.
@@ -50,18 +66,8 @@ pub fn monitor_run<T: Real>(scn: &Scenario) -> Option<(StateVec<T>, StateVec<T>)
     let mut monitor = UkfMonitor::<T>::new(cfg).ok()?;
     let mut last = None;
     for s in Simulator::new(scn, 1).take(MONITOR_STEPS) {
-        // The samples are rounded to f32 first on both sides, so the runs
-        // differ only in the filter's arithmetic.
-        let u = ImuVec::from_fn(|i, _| {
-            s.imu
-                .map_or(T::lit(f64::NAN), |v| T::lit(f64::from(v[i] as f32)))
-        });
-        let z = MeasVec::from_fn(|i, _| T::lit(f64::from(s.aiding[i] as f32)));
-        let m = Measurement {
-            z,
-            available: s.aiding_available,
-        };
-        let r = monitor.step(&u, T::lit(f64::from(s.dt as f32)), &m);
+        let (u, dt, m) = rounded_to_f32(&s);
+        let r = monitor.step(&u, dt, &m);
         last = Some((r.state, r.state_sigma));
     }
     last
@@ -81,16 +87,7 @@ pub fn otsukf_run<T: Real>(
     let mut monitor = OtsukfMonitor::<T>::new(cfg).ok()?;
     let mut last = None;
     for s in Simulator::new(&scn, 1).take(MONITOR_STEPS) {
-        let u = ImuVec::from_fn(|i, _| {
-            s.imu
-                .map_or(T::lit(f64::NAN), |v| T::lit(f64::from(v[i] as f32)))
-        });
-        let z = MeasVec::from_fn(|i, _| T::lit(f64::from(s.aiding[i] as f32)));
-        let m = Measurement {
-            z,
-            available: s.aiding_available,
-        };
-        let dt = T::lit(f64::from(s.dt as f32));
+        let (u, dt, m) = rounded_to_f32(&s);
         each(&mut || {
             let r = monitor.step(&u, dt, &m);
             last = Some((r.total_bias, r.fault_sigma));

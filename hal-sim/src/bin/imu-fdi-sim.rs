@@ -799,6 +799,63 @@ fn parity_s4(first_seed: u64, seeds: u64) -> Result<()> {
     Ok(())
 }
 
+/// The command line's changes to the S3 two-stage configuration
+/// (`cargo sim otsukf`).
+#[derive(Debug, Clone, Copy)]
+struct OtsTuning {
+    /// Multipliers of the accelerometer and gyro fault random walk.
+    qf: [f64; 2],
+    /// `adapt_gain` per channel.
+    gain: Option<imu_fdi::model::ImuVec<f64>>,
+    /// `adapt_k`.
+    k: Option<f64>,
+    /// `adapt_hold_s`.
+    hold: Option<f64>,
+    /// `adapt_level` (≤ 0: none).
+    level: Option<f64>,
+}
+
+impl OtsTuning {
+    /// The paper's or realistic configuration with these changes.
+    fn config<T: imu_fdi::math::Real>(
+        &self,
+        scn: &hal_sim::Scenario,
+        setting: hal_sim::ots::Setting,
+    ) -> imu_fdi::monitor::OtsukfConfig<T> {
+        let mut c = hal_sim::ots::otsukf_config::<T>(scn, setting);
+        for (i, q) in c.fault_psd.iter_mut().enumerate() {
+            *q *= T::lit(if i < 3 { self.qf[0] } else { self.qf[1] });
+        }
+        if let Some(g) = self.gain {
+            c.adapt_gain = g.map(T::lit);
+        }
+        if let Some(k) = self.k {
+            c.adapt_k = T::lit(k);
+        }
+        if let Some(h) = self.hold {
+            c.adapt_hold_s = T::lit(h);
+        }
+        match self.level {
+            Some(l) if l > 0.0 => c.adapt_level = Some(T::lit(l)),
+            Some(_) => c.adapt_level = None,
+            None => {}
+        }
+        c
+    }
+
+    /// Only the fault random walk: what the augmented UKF shares (it has
+    /// no adaptation).
+    fn fault_walk_only(&self) -> Self {
+        Self {
+            qf: self.qf,
+            gain: None,
+            k: None,
+            hold: None,
+            level: None,
+        }
+    }
+}
+
 fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.cmd {
@@ -1115,12 +1172,8 @@ fn main() -> Result<()> {
             fault_free,
             shape,
         } => {
-            use hal_sim::ots::{
-                otsukf_config, run_augmented, run_otsukf, RmseAccumulator, Setting, PAPER_RMSE,
-            };
-            use imu_fdi::math::Real;
+            use hal_sim::ots::{run_augmented, run_otsukf, RmseAccumulator, Setting, PAPER_RMSE};
             use imu_fdi::model::ImuVec;
-            use imu_fdi::monitor::OtsukfConfig;
             let mut scn = scenario(&name)?;
             if fault_free {
                 scn.faults.clear();
@@ -1147,37 +1200,6 @@ fn main() -> Result<()> {
                 Some([a, g]) if *a > 0.0 && *g > 0.0 => [*a, *g],
                 Some(_) => return Err(anyhow!("--qf-scale needs two positive numbers")),
             };
-            // The paper's or realistic tuning with the command line's
-            // changes; the augmented UKF gets the same Q^f.
-            fn tuned<T: Real>(
-                scn: &hal_sim::Scenario,
-                setting: Setting,
-                qf: [f64; 2],
-                gain: Option<ImuVec<f64>>,
-                k: Option<f64>,
-                hold: Option<f64>,
-                level: Option<f64>,
-            ) -> OtsukfConfig<T> {
-                let mut c = otsukf_config::<T>(scn, setting);
-                for (i, q) in c.fault_psd.iter_mut().enumerate() {
-                    *q *= T::lit(if i < 3 { qf[0] } else { qf[1] });
-                }
-                if let Some(g) = gain {
-                    c.adapt_gain = g.map(T::lit);
-                }
-                if let Some(k) = k {
-                    c.adapt_k = T::lit(k);
-                }
-                if let Some(h) = hold {
-                    c.adapt_hold_s = T::lit(h);
-                }
-                match level {
-                    Some(l) if l > 0.0 => c.adapt_level = Some(T::lit(l)),
-                    Some(_) => c.adapt_level = None,
-                    None => {}
-                }
-                c
-            }
             let adapt_gain = match adapt_gain.as_deref() {
                 None => None,
                 Some(g) if g.iter().any(|v| !v.is_finite() || *v < 1.0) => {
@@ -1187,37 +1209,26 @@ fn main() -> Result<()> {
                 Some(g) if g.len() == 6 => Some(ImuVec::from_row_slice(g)),
                 Some(_) => return Err(anyhow!("--adapt-gain takes one value or six")),
             };
+            let tuning = OtsTuning {
+                qf,
+                gain: adapt_gain,
+                k: adapt_k,
+                hold: adapt_hold,
+                level: adapt_level,
+            };
             let (mut two, mut aug) = (RmseAccumulator::default(), RmseAccumulator::default());
             let mut false_flags = 0u64;
             for seed in first_seed..first_seed + seeds {
                 let (acc, ff) = if f32 {
-                    let c = tuned::<f32>(
-                        &scn,
-                        setting,
-                        qf,
-                        adapt_gain,
-                        adapt_k,
-                        adapt_hold,
-                        adapt_level,
-                    );
-                    run_otsukf::<f32>(&scn, seed, c)
+                    run_otsukf::<f32>(&scn, seed, tuning.config(&scn, setting))
                 } else {
-                    let c = tuned::<f64>(
-                        &scn,
-                        setting,
-                        qf,
-                        adapt_gain,
-                        adapt_k,
-                        adapt_hold,
-                        adapt_level,
-                    );
-                    run_otsukf::<f64>(&scn, seed, c)
+                    run_otsukf::<f64>(&scn, seed, tuning.config(&scn, setting))
                 }
                 .ok_or_else(|| anyhow!("the two-stage monitor refused its configuration"))?;
                 two.merge(&acc);
                 false_flags += ff;
                 if augmented {
-                    let c = tuned::<f64>(&scn, setting, qf, None, None, None, None);
+                    let c = tuning.fault_walk_only().config::<f64>(&scn, setting);
                     let a = run_augmented(&scn, seed, &c)
                         .ok_or_else(|| anyhow!("augmented UKF failed"))?;
                     aug.merge(&a);
