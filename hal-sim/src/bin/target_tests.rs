@@ -389,6 +389,36 @@ fn profile() {
             &mut gate
         )
     );
+    // The two-stage filter's own steps (the monitor adds the Jacobians,
+    // Φ, F and Q^x of the predict, 2.6k, and the measurement Jacobian).
+    let mut ts = imu_fdi::filter::TwoStageUkf::<f32, 6, 13, 6>::new(
+        x,
+        p,
+        ImuVec::zeros(),
+        p,
+        p * 1e-3,
+        &SigmaParams::default(),
+        STATE_ANGLES,
+    )
+    .unwrap_or_else(|| loop {});
+    let _ = cost!(
+        "two-stage predict",
+        ts.predict(|s| m.step(s, &u, 0.01), &a, &b, &p)
+    );
+    let m2 = MeasurementModel::<f32>::new(AidingKind::GnssAttitude);
+    let hj = m2.jacobian(&x, &omega);
+    let _ = cost!(
+        "two-stage update (M2)",
+        ts.update(
+            &z,
+            &[true; 6],
+            |s| Ok::<_, ()>(m2.predict(s, &omega)),
+            &hj,
+            &r,
+            &[false, false, false, true, true, true],
+            &mut gate
+        )
+    );
     let w = MeasVec::from_element(1e4f32);
     let _ = cost!("glr_isolate", glr_isolate(&a, &x, &w, 40.0, 0.02, 3));
     let _ = cost!(
