@@ -193,14 +193,24 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
         let mut x_full = self.bias_free.state() + self.u * self.fault;
         wrap_angles(&mut x_full, &self.angles);
         let mut s = hjac * self.u;
-        let signature = s * self.fault;
+        let mut signature = s * self.fault;
         let mut z_mod = z + signature;
         wrap_angles(&mut z_mod, meas_angles);
+        // P^f Sᵀ serves the gate now and the fault gain after.
+        let mut pf_st = self.pf * s.transpose();
         // Gate what the augmented filter would: the full innovation, with
-        // the fault's uncertainty in its variance.
+        // the fault's uncertainty diag(S P^f Sᵀ) in its variance.
+        let mut extra_variance = SVector::<T, M>::zeros();
+        for ((e, s_row), pf_col) in extra_variance
+            .iter_mut()
+            .zip(s.row_iter())
+            .zip(pf_st.column_iter())
+        {
+            *e = s_row.transpose().dot(&pf_col);
+        }
         let shift = GateShift {
             innovation_offset: signature,
-            extra_variance: (s * self.pf * s.transpose()).diagonal(),
+            extra_variance,
         };
         let out = self.bias_free.update_delayed_gated(
             &x_full,
@@ -212,6 +222,8 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
             gate,
             &shift,
         )?;
+        // Channels not fused carry no information on the fault either: zero
+        // their rows of S (and so of S f̂ and their columns of P^f Sᵀ).
         let mut rbar = SVector::<T, M>::zeros();
         for (i, d) in out.diag.iter().enumerate() {
             if d.fused {
@@ -220,12 +232,15 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
                 }
             } else {
                 s.set_row(i, &nalgebra::SMatrix::<T, 1, L>::zeros());
+                pf_st.set_column(i, &SVector::<T, L>::zeros());
+                if let Some(v) = signature.get_mut(i) {
+                    *v = T::zero();
+                }
             }
         }
-        let mut rf = rbar - s * self.fault;
+        let mut rf = rbar - signature;
         wrap_angles(&mut rf, meas_angles);
         let pyy = out.innovation_covariance;
-        let pf_st = self.pf * s.transpose();
         let mut a = pyy + s * pf_st;
         symmetrize(&mut a);
         let la = cholesky(&a).map_err(UkfError::InnovationCovariance)?;

@@ -309,7 +309,6 @@ impl<T: Real> OtsukfMonitor<T> {
         self.advance_phase();
         if self.phase == Phase::Monitoring {
             self.decide();
-            self.hold_adaptation_on_significant_faults();
         }
         self.compose(imu, health, updated)
     }
@@ -390,23 +389,18 @@ impl<T: Real> OtsukfMonitor<T> {
         }
     }
 
-    fn hold_adaptation_on_significant_faults(&mut self) {
-        let Some(level) = self.cfg.adapt_level else {
-            return;
-        };
-        let f = self.filter.fault() - self.nominal;
-        let var = self.filter.fault_covariance().diagonal();
-        for ((bst, fj), v) in self.boost.iter_mut().zip(f.iter()).zip(var.iter()) {
-            if fj.abs() >= level * v.max(T::zero()).sqrt_fast() {
-                *bst = self.cfg.adapt_hold_s;
-            }
-        }
-    }
-
+    /// The per-channel decision on `f̂ − b`, and the `adapt_level` hold of
+    /// the `Q^f` boost, which tests the same standardised estimate.
     fn decide(&mut self) {
         let f = self.filter.fault() - self.nominal;
         let pf = self.filter.fault_covariance();
-        for (j, l) in self.latched.iter_mut().enumerate() {
+        let hold = self.cfg.adapt_hold_s;
+        for ((j, l), bst) in self
+            .latched
+            .iter_mut()
+            .enumerate()
+            .zip(self.boost.iter_mut())
+        {
             let (Some(fj), Some(var), Some(min)) = (
                 f.get(j).copied(),
                 pf.get((j, j)).copied(),
@@ -416,6 +410,9 @@ impl<T: Real> OtsukfMonitor<T> {
             };
             let sigma = var.max(T::zero()).sqrt_fast();
             let mag = fj.abs();
+            if matches!(self.cfg.adapt_level, Some(level) if mag >= level * sigma) {
+                *bst = hold;
+            }
             if *l == 0 {
                 if mag >= self.cfg.k_on * sigma && mag >= min {
                     *l = if fj > T::zero() { 1 } else { -1 };
