@@ -105,34 +105,12 @@ impl RmseAccumulator {
     /// RMS of each fault estimate before its channel's first fault
     /// (m/s², °/s); NaN where there were no such samples.
     pub fn quiet_rms(&self) -> [f64; 6] {
-        core::array::from_fn(|c| {
-            let r = if self.quiet_n[c] == 0 {
-                f64::NAN
-            } else {
-                libm::sqrt(self.quiet_sum[c] / self.quiet_n[c] as f64)
-            };
-            if c >= 3 {
-                r.to_degrees()
-            } else {
-                r
-            }
-        })
+        core::array::from_fn(|c| rms(self.quiet_sum[c], self.quiet_n[c], c >= 3))
     }
     /// RMSE per entry (m/s for velocities, degrees for angles, m/s² for
     /// accelerometer faults, °/s for gyro faults).
     pub fn rmse(&self) -> [f64; 12] {
-        core::array::from_fn(|i| {
-            let r = if self.n[i] == 0 {
-                f64::NAN
-            } else {
-                libm::sqrt(self.sum[i] / self.n[i] as f64)
-            };
-            if (3..6).contains(&i) || i >= 9 {
-                r.to_degrees()
-            } else {
-                r
-            }
-        })
+        core::array::from_fn(|i| rms(self.sum[i], self.n[i], (3..6).contains(&i) || i >= 9))
     }
     fn record(&mut self, scn: &Scenario, s: &crate::SimSample, state: &[f64; 6], fault: &[f64; 6]) {
         for c in 0..6 {
@@ -156,6 +134,19 @@ impl RmseAccumulator {
                 self.add(6 + c, fault[c] - s.fault[c]);
             }
         }
+    }
+}
+
+/// `√(sum / n)`, in degrees if `angular`; NaN without samples.
+fn rms(sum: f64, n: u64, angular: bool) -> f64 {
+    if n == 0 {
+        return f64::NAN;
+    }
+    let r = libm::sqrt(sum / n as f64);
+    if angular {
+        r.to_degrees()
+    } else {
+        r
     }
 }
 
