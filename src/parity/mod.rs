@@ -20,6 +20,7 @@
 mod geometry;
 mod health;
 mod monitor;
+mod multiscale;
 mod space;
 mod training;
 
@@ -28,6 +29,7 @@ pub use health::{HealthConfig, Reading, SensorHealth, SensorStatus};
 pub use monitor::{
     DetectorFlags, ParityConfig, ParityDetector, ParityMonitor, ParityPhase, ParityReport,
 };
+pub use multiscale::{MultiscaleConfig, MultiscaleDecision, REGRESSORS, SCALES};
 pub use space::ParitySpace;
 pub use training::{Baseline, Trainer};
 
@@ -47,4 +49,6 @@ pub enum ConfigError {
     Window,
     /// False-alarm probability outside (0, 0.5) or run length ≤ 1.
     Probability,
+    /// A field of [`MultiscaleConfig`] out of range (see its `check`).
+    Multiscale,
 }
