@@ -17,6 +17,7 @@ pub mod imu_model;
 pub mod ots;
 #[cfg(all(target_os = "none", feature = "sil"))]
 pub mod qemu;
+pub mod realistic;
 pub mod scenario;
 pub mod setup;
 pub mod sim;
