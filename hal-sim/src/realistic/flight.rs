@@ -45,17 +45,18 @@ pub struct FlightParams {
 }
 
 impl FlightParams {
-    /// Log171's flight: ~10–25 °/s of gust response in Loiter, then Acro
-    /// with rate pulses of 100–400 °/s.
+    /// Log171's flight (80–235 s): 137 s of Loiter with 15/23/15 °/s of
+    /// roll/pitch/yaw rate sd, then 18 s of Acro with rate pulses of
+    /// 40–170 °/s (log171's Acro peaks at 165 °/s).
     pub fn loiter_then_acro() -> Self {
         Self {
             loiter_s: 137.0,
             acro_s: 18.0,
-            loiter_rate_sd: [12.0 * DEG, 14.0 * DEG, 10.0 * DEG],
+            loiter_rate_sd: [15.0 * DEG, 23.0 * DEG, 15.0 * DEG],
             rate_bandwidth_hz: 0.8,
             horizontal_sd: [0.6, 0.35],
             load_factor_sd: 0.08,
-            acro_rate: (100.0 * DEG, 400.0 * DEG),
+            acro_rate: (40.0 * DEG, 170.0 * DEG),
             acro_pulse_s: (0.4, 1.2),
             acro_gap_s: (0.5, 2.5),
             hover_throttle: 0.5,

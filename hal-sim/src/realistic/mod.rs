@@ -57,6 +57,7 @@
 
 pub mod dsp;
 pub mod flight;
+mod log171;
 pub mod stats;
 
 use core::f64::consts::PI;
@@ -184,17 +185,25 @@ pub struct ImuParams {
     /// Local vibration transmissibility per channel (1: the board's
     /// common vibration; a chip on a flexing part of the PCB sees more).
     pub vib_gain: [f64; CHANNELS],
-    /// Scale-factor error per channel, fraction.
-    pub scale: [f64; CHANNELS],
-    /// Cross-axis coupling per channel: the fraction of the next axis
-    /// (x←y, y←z, z←x) it also measures.
-    pub cross_axis: [f64; CHANNELS],
+    /// Scale-factor and misalignment errors: row `ch` is what channel `ch`
+    /// measures of the x, y and z axes of its kind beyond the ideal (the
+    /// diagonal is the scale-factor error, the rest cross-axis coupling and
+    /// mounting misalignment), fractions.
+    pub misalignment: [[f64; 3]; CHANNELS],
     /// Residual turn-on bias after calibration, per channel.
     pub bias: [f64; CHANNELS],
+    /// In-run bias instability per channel: sd of a Gauss–Markov bias with
+    /// time constant `bias_tau_s` (datasheets' "bias stability"; on a
+    /// board it also carries uneven heating of the chips), unit.
+    pub bias_instability: [f64; CHANNELS],
+    /// Correlation time of that bias, s.
+    pub bias_tau_s: f64,
     /// Bias temperature coefficient per channel, unit/K.
     pub thermal: [f64; CHANNELS],
     /// Accelerometer vibration rectification: DC shift = coefficient ·
-    /// (vibration)², per accel axis, 1/(m/s²).
+    /// mean-square board vibration (0.1 s average), per accel axis,
+    /// 1/(m/s²). Per unit of the common vibration, so it does not move when
+    /// `vib_gain` is refitted.
     pub vre: [f64; 3],
     /// Position from the centre of gravity, m (body FRD).
     pub lever_arm: [f64; 3],
@@ -212,6 +221,15 @@ pub struct VibrationParams {
     /// Amplitude (peak) of the fundamental, 2nd and 3rd harmonic per
     /// channel at hover throttle.
     pub harmonic_amp: [[f64; CHANNELS]; 3],
+    /// Order of a high rotor line (a multiple of the blade-pass frequency,
+    /// e.g. the motors' electrical commutation line of a 14-pole motor
+    /// with 2-blade props at 7×), 0 for none. Near the IMUs' 1 kHz ODR it
+    /// folds to a few Hz in a chip without an analog anti-alias filter and
+    /// then wanders through the band with throttle: the narrowband
+    /// tones log171's IMU0 x gyro shows at 4–24 Hz.
+    pub line_order: u32,
+    /// Amplitude (peak) of that line per channel at hover throttle.
+    pub line_amp: [f64; CHANNELS],
     /// Broadband frame vibration sd per channel at hover throttle.
     pub broadband_sd: [f64; CHANNELS],
     /// Centre and quality of the broadband band-pass, Hz and Q.
@@ -264,133 +282,6 @@ pub struct RealisticProfile {
 }
 
 impl RealisticProfile {
-    /// A profile fitted to ArduPilot log171 (Pixhawk, ArduCopter 3.3-dev:
-    /// IMU0 MPU6000, IMU1 L3GD20 + LSM303D, IMU2 MPU9250; 49 Hz point
-    /// samples after the 20 Hz INS filters; Loiter then Acro). 155 s like
-    /// the log's fault-free 80–235 s. See `hal-sim/tests/realistic_profile.rs`
-    /// for the figures it matches.
-    pub fn log171() -> Self {
-        let mpu6000 = ImuParams {
-            name: "MPU6000",
-            accel: SensorChain {
-                clock_ppm: 25.0,
-                clock_offset_s: 0.00013,
-                ..SensorChain::mpu_accel(42.0)
-            },
-            gyro: SensorChain {
-                clock_ppm: 25.0,
-                clock_offset_s: 0.00013,
-                ..SensorChain::mpu_gyro(42.0)
-            },
-            vib_gain: [1.0, 1.0, 1.0, 5.0, 1.5, 1.2],
-            scale: [0.0, 0.0, 0.0, 0.01, 0.0, 0.0],
-            cross_axis: [0.0; CHANNELS],
-            bias: [0.0; CHANNELS],
-            thermal: [0.004, 0.004, 0.02, 0.02 * DEG, 0.01 * DEG, 0.01 * DEG],
-            vre: [0.0, 0.0, 0.003],
-            lever_arm: [0.01, 0.0, 0.0],
-        };
-        // L3GD20 gyro: 760 Hz ODR, 50 Hz digital LPF, 0.03 °/s/√Hz
-        // (datasheet); LSM303D accel: 800 Hz, 50 Hz analog anti-alias,
-        // 150 µg/√Hz (datasheet); PX4 30 Hz driver + ArduPilot 20 Hz.
-        let l3gd20 = ImuParams {
-            name: "L3GD20+LSM303D",
-            accel: SensorChain {
-                odr_hz: 800.0,
-                clock_ppm: -40.0,
-                clock_offset_s: 0.00047,
-                analog_aa_hz: 50.0,
-                chip_lpf_hz: 0.0,
-                noise_density: 150e-6 * G0,
-                ..SensorChain::mpu_accel(0.0)
-            },
-            gyro: SensorChain {
-                odr_hz: 760.0,
-                clock_ppm: 60.0,
-                clock_offset_s: 0.00091,
-                chip_lpf_hz: 50.0,
-                noise_density: 0.03 * DEG,
-                lsb: 2000.0 * DEG / 32768.0,
-                ..SensorChain::mpu_gyro(0.0)
-            },
-            vib_gain: [1.0, 1.0, 1.0, 0.5, 0.7, 0.6],
-            scale: [0.0; CHANNELS],
-            cross_axis: [0.0; CHANNELS],
-            bias: [0.0; CHANNELS],
-            thermal: [-0.004, 0.003, -0.015, -0.01 * DEG, 0.01 * DEG, -0.005 * DEG],
-            vre: [0.0, 0.0, -0.002],
-            lever_arm: [-0.01, 0.01, 0.0],
-        };
-        let mpu9250 = ImuParams {
-            name: "MPU9250",
-            accel: SensorChain {
-                clock_ppm: -15.0,
-                clock_offset_s: 0.00071,
-                noise_density: 300e-6 * G0,
-                ..SensorChain::mpu_accel(41.0)
-            },
-            gyro: SensorChain {
-                clock_ppm: -15.0,
-                clock_offset_s: 0.00071,
-                noise_density: 0.01 * DEG,
-                ..SensorChain::mpu_gyro(41.0)
-            },
-            vib_gain: [1.0, 1.0, 1.0, 0.8, 1.0, 0.8],
-            scale: [0.0; CHANNELS],
-            cross_axis: [0.0; CHANNELS],
-            bias: [0.0; CHANNELS],
-            thermal: [0.002, -0.004, 0.025, 0.01 * DEG, -0.01 * DEG, 0.008 * DEG],
-            vre: [0.0, 0.0, 0.004],
-            lever_arm: [0.0, -0.01, 0.005],
-        };
-        Self {
-            name: "log171",
-            internal_hz: 4000.0,
-            motion_hz: 500.0,
-            log_hz: 49.2,
-            log_jitter_s: 0.001,
-            decimation: Decimation::PointSample,
-            duration_s: 155.0,
-            flight: FlightParams::loiter_then_acro(),
-            vibration: VibrationParams {
-                blade_pass_hz: (80.0, 200.0),
-                rotor_spread: 0.03,
-                harmonic_amp: [
-                    [1.5, 1.5, 3.0, 3.0 * DEG, 3.0 * DEG, 1.5 * DEG],
-                    [0.8, 0.8, 1.5, 1.5 * DEG, 1.5 * DEG, 0.8 * DEG],
-                    [0.4, 0.4, 0.8, 0.8 * DEG, 0.8 * DEG, 0.4 * DEG],
-                ],
-                broadband_sd: [4.0, 4.0, 8.0, 12.0 * DEG, 10.0 * DEG, 5.0 * DEG],
-                broadband_band: (700.0, 0.4),
-                throttle_exponent: 2.0,
-            },
-            thermal: ThermalParams {
-                warmup_k: 6.0,
-                warmup_tau_s: 120.0,
-                throttle_k: 8.0,
-                lag_s: 20.0,
-            },
-            imus: [mpu6000, l3gd20, mpu9250],
-        }
-    }
-
-    /// Log171's board with its vibration raised until the accelerometers
-    /// clip (±16 g) on z: the asymmetric clipping of a −1 g-offset
-    /// vibration rectifies to a DC shift of several m/s² (ArduPilot asks
-    /// its EKF tests to cover ≥ 5 m/s² of such accel-Z offset), and the
-    /// gyros' vibration is doubled.
-    pub fn log171_clipping() -> Self {
-        let mut p = Self::log171();
-        p.name = "log171-clipping";
-        for h in p.vibration.harmonic_amp.iter_mut() {
-            for (ch, a) in h.iter_mut().enumerate() {
-                *a *= if ch == AZ { 12.0 } else { 2.0 };
-            }
-        }
-        p.vibration.broadband_sd[AZ] *= 3.0;
-        p
-    }
-
     /// The same profile for `s` seconds (a false-alarm campaign: the
     /// loiter/acro cycle repeats).
     pub fn with_duration(mut self, s: f64) -> Self {
@@ -597,6 +488,15 @@ impl Vibration {
         let h1 = self.rotors;
         let h2 = [h1[0].square(), h1[1].square()];
         let h3 = [h2[0].mul(&h1[0]), h2[1].mul(&h1[1])];
+        let line = if self.p.line_order > 0 {
+            let mut z = h1;
+            for _ in 1..self.p.line_order {
+                z = [z[0].mul(&h1[0]), z[1].mul(&h1[1])];
+            }
+            Some(z)
+        } else {
+            None
+        };
         let r = throttle / hover.max(1e-3);
         let scale = if self.p.throttle_exponent == 2.0 {
             r * r
@@ -616,6 +516,12 @@ impl Vibration {
                 let re = (z[0].re + z[1].re) * c.re - (z[0].im + z[1].im) * c.im;
                 v += self.p.harmonic_amp[h][ch] * re * core::f64::consts::FRAC_1_SQRT_2;
             }
+            if let Some(z) = line {
+                // Its coupling phase: the fundamental's, rotated.
+                let c = &self.coupling[0][ch];
+                let re = (z[0].re + z[1].re) * c.im + (z[0].im + z[1].im) * c.re;
+                v += self.p.line_amp[ch] * re * core::f64::consts::FRAC_1_SQRT_2;
+            }
             v += self.p.broadband_sd[ch] * self.band_gain * self.band[ch].step(u[ch]);
             *o = scale * v;
         }
@@ -626,6 +532,8 @@ impl Vibration {
 #[derive(Debug, Clone)]
 struct ImuState {
     p: ImuParams,
+    /// Gauss–Markov part of the bias.
+    drift: [f64; CHANNELS],
     accel: ChainState,
     gyro: ChainState,
 }
@@ -662,9 +570,16 @@ impl RealisticArray {
         let m0 = flight.step();
         let m1 = flight.step();
         let vibration = Vibration::new(p.vibration, p.internal_hz, &mut vib_rng);
+        let mut drift_rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x6472_6966);
         let imus = p.imus.map(|ip| {
             let mut s = ImuState {
                 p: ip,
+                // Drawn from its stationary distribution: the flight starts
+                // with the bias already wandered, as after arming.
+                drift: ip.bias_instability.map(|sd| {
+                    let n: f64 = StandardNormal.sample(&mut drift_rng);
+                    sd * n
+                }),
                 accel: ChainState::new(ip.accel, p.internal_hz),
                 gyro: ChainState::new(ip.gyro, p.internal_hz),
             };
@@ -739,6 +654,16 @@ impl RealisticArray {
             let warm = th.warmup_k * (1.0 - libm::exp(-self.t / th.warmup_tau_s.max(1e-3)));
             self.heat += (th.throttle_k * (m.throttle - hover) - self.heat) * dtm / th.lag_s.max(1e-3);
             self.temperature = warm + self.heat;
+            for s in self.imus.iter_mut() {
+                let a = dtm / s.p.bias_tau_s.max(1e-3);
+                let q = libm::sqrt(2.0 * a);
+                for (d, sd) in s.drift.iter_mut().zip(s.p.bias_instability) {
+                    if sd > 0.0 {
+                        let n: f64 = StandardNormal.sample(&mut self.rng);
+                        *d += -a * *d + sd * q * n;
+                    }
+                }
+            }
         }
         let vib = self.vibration.step(m.throttle, hover, self.dt, &mut self.rng);
         // Mean-square vibration per accel axis, 0.1 s smoothing, for the
@@ -763,13 +688,17 @@ impl RealisticArray {
             for (ch, xo) in x.iter_mut().enumerate() {
                 let axis = ch % 3;
                 let truth = if ch < 3 { f } else { w };
-                let mut v = (1.0 + ip.scale[ch]) * truth[axis]
-                    + ip.cross_axis[ch] * truth[(axis + 1) % 3]
+                let mis = ip.misalignment[ch];
+                let mut v = truth[axis]
+                    + mis[0] * truth[0]
+                    + mis[1] * truth[1]
+                    + mis[2] * truth[2]
                     + ip.vib_gain[ch] * vib[ch]
                     + ip.bias[ch]
+                    + s.drift[ch]
                     + ip.thermal[ch] * temp;
                 if ch < 3 {
-                    v += ip.vre[ch] * ip.vib_gain[ch] * ip.vib_gain[ch] * self.vib_power[ch];
+                    v += ip.vre[ch] * self.vib_power[ch];
                 }
                 *xo = v;
             }
