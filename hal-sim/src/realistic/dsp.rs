@@ -140,7 +140,10 @@ pub fn uniform_pair(rng: &mut Xoshiro256PlusPlus) -> (f64, f64) {
     let r = rng.next_u64();
     let hi = (r >> 32) as f64;
     let lo = (r & 0xffff_ffff) as f64;
-    (K * hi - 1.732_050_807_568_877_2, K * lo - 1.732_050_807_568_877_2)
+    (
+        K * hi - 1.732_050_807_568_877_2,
+        K * lo - 1.732_050_807_568_877_2,
+    )
 }
 
 #[cfg(test)]

@@ -108,7 +108,14 @@ impl RealisticProfile {
             bias: [0.0; CHANNELS],
             bias_instability: [0.0166, 0.0546, 0.0, 0.0, 0.0841 * DEG, 0.0681 * DEG],
             bias_tau_s: 30.0,
-            thermal: [-0.003, 0.003, -0.003, -0.005 * DEG, 0.005 * DEG, -0.005 * DEG],
+            thermal: [
+                -0.003,
+                0.003,
+                -0.003,
+                -0.005 * DEG,
+                0.005 * DEG,
+                -0.005 * DEG,
+            ],
             vre: [0.0, 0.0, -0.002],
             lever_arm: [-0.01, 0.01, 0.0],
         };

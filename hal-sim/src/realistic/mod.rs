@@ -479,7 +479,13 @@ impl Vibration {
     }
 
     #[inline]
-    fn step(&mut self, throttle: f64, hover: f64, dt: f64, rng: &mut Xoshiro256PlusPlus) -> [f64; CHANNELS] {
+    fn step(
+        &mut self,
+        throttle: f64,
+        hover: f64,
+        dt: f64,
+        rng: &mut Xoshiro256PlusPlus,
+    ) -> [f64; CHANNELS] {
         let (f0, f1) = self.p.blade_pass_hz;
         let f = f0 + (f1 - f0) * libm::sqrt(throttle.clamp(0.0, 1.0));
         let d = 2.0 * PI * f * dt;
@@ -652,7 +658,8 @@ impl RealisticArray {
             let th = self.p.thermal;
             let dtm = self.dt * self.motion_every as f64;
             let warm = th.warmup_k * (1.0 - libm::exp(-self.t / th.warmup_tau_s.max(1e-3)));
-            self.heat += (th.throttle_k * (m.throttle - hover) - self.heat) * dtm / th.lag_s.max(1e-3);
+            self.heat +=
+                (th.throttle_k * (m.throttle - hover) - self.heat) * dtm / th.lag_s.max(1e-3);
             self.temperature = warm + self.heat;
             for s in self.imus.iter_mut() {
                 let a = dtm / s.p.bias_tau_s.max(1e-3);
@@ -665,7 +672,9 @@ impl RealisticArray {
                 }
             }
         }
-        let vib = self.vibration.step(m.throttle, hover, self.dt, &mut self.rng);
+        let vib = self
+            .vibration
+            .step(m.throttle, hover, self.dt, &mut self.rng);
         // Mean-square vibration per accel axis, 0.1 s smoothing, for the
         // rectification term (a DC shift ∝ vibration power).
         let a = self.dt / 0.1;

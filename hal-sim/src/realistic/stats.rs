@@ -239,7 +239,11 @@ mod tests {
         let mut s = InterImuStats::new(0.0, 100.0);
         for i in 0..5000 {
             let t = i as f64 * 0.02;
-            let sq = if libm::fmod(t, 20.0) < 10.0 { 0.5 } else { -0.5 };
+            let sq = if libm::fmod(t, 20.0) < 10.0 {
+                0.5
+            } else {
+                -0.5
+            };
             let mut row = LogRow {
                 t,
                 imu: [[0.0; CHANNELS]; IMUS],
