@@ -171,9 +171,9 @@ fn log171_profile_matches_the_real_flight_and_white_noise_does_not() {
         println!("{kind}: sim/log geometric mean per statistic {STAT_NAMES:?} = {r:.2?}");
     }
     println!("per channel (IMU-averaged) sim/log:");
-    for ch in 0..CHANNELS {
+    for (ch, name) in NAMES.iter().enumerate() {
         let r: Vec<f64> = (0..5).map(|i| channel_ratio(&log, &sim, ch, i)).collect();
-        println!("  {}: {r:.2?}", NAMES[ch]);
+        println!("  {name}: {r:.2?}");
     }
     for r in ratios.iter().flatten() {
         assert!((0.7..=1.3).contains(r), "{ratios:?}");

@@ -376,15 +376,15 @@ impl ChainState {
     }
 
     fn settle(&mut self, x: [f64; 3]) {
-        for i in 0..3 {
-            self.aa[i].settle(x[i]);
-            self.chip[i].settle(x[i]);
+        for (i, &xi) in x.iter().enumerate() {
+            self.aa[i].settle(xi);
+            self.chip[i].settle(xi);
             for d in self.driver[i].iter_mut() {
-                d.settle(x[i]);
+                d.settle(xi);
             }
-            self.prev[i] = x[i];
-            self.latest[i] = x[i];
         }
+        self.prev = x;
+        self.latest = x;
     }
 
     /// One internal step: `x` is the sensing element's input at `t`
@@ -400,8 +400,8 @@ impl ChainState {
         while self.next_t <= t {
             // The ADC samples at its own clock, between two internal steps.
             let frac = 1.0 - (t - self.next_t) / dt;
-            for i in 0..3 {
-                let v = self.prev[i] + frac * (a[i] - self.prev[i]);
+            for (i, &ai) in a.iter().enumerate() {
+                let v = self.prev[i] + frac * (ai - self.prev[i]);
                 let n: f64 = StandardNormal.sample(rng);
                 let mut v = v + self.sigma * n;
                 let fs = self.spec.full_scale;
