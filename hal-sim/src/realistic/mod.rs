@@ -43,14 +43,26 @@
 //! layout as `tests/data/ap_log171_3imu.csv`.
 //!
 //! ```
+//! use hal_sim::array::ArrayKind;
 //! use hal_sim::realistic::{ChannelFault, RealisticArray, RealisticProfile, AZ, GX};
-//! // One minute of the log171-like flight with a +1 °/s step on IMU 2's gx
-//! // from 30 s.
-//! let sim = RealisticArray::new(&RealisticProfile::log171().with_duration(60.0), 7)
+//! use imu_fdi::parity::Reading;
+//!
+//! // One minute of the log171-like flight with a +1 °/s step on IMU 2's x
+//! // gyro from 30 s (several faults: chain `with_fault`).
+//! let profile = RealisticProfile::log171().with_duration(60.0);
+//! let sim = RealisticArray::new(&profile, 7)
 //!     .with_fault(ChannelFault::bias(2, GX, 30.0, f64::INFINITY, 1f64.to_radians()));
-//! let rows: Vec<_> = sim.collect();
-//! assert!((rows.len() as f64 - 60.0 * 49.2).abs() < 5.0);
-//! assert!(rows.iter().all(|r| r.imu.iter().all(|v| (v[AZ] + 9.8).abs() < 9.0)));
+//! let mut rows = 0;
+//! for row in sim {
+//!     // row.t, row.imu[k] = [ax, ay, az, gx, gy, gz] as in the CSV; or the
+//!     // nine gyro readings for a `Geometry::triads` parity monitor
+//!     // (sensor 3·IMU + axis: IMU 2's gx is sensor 6).
+//!     let gyros: [Reading<f64>; 9] = row.readings(ArrayKind::Gyro);
+//!     assert!(matches!(gyros[6], Reading::Sample(x) if x.is_finite()));
+//!     assert!(row.imu.iter().all(|v| (v[AZ] + 9.8).abs() < 9.0));
+//!     rows += 1;
+//! }
+//! assert!((rows as f64 - 60.0 * 49.2).abs() < 5.0);
 //! ```
 //!
 //! Deterministic from the seed; `no_std`, no allocation.
@@ -67,7 +79,9 @@ use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
 use imu_fdi::model::G0;
+use imu_fdi::parity::Reading;
 
+use crate::array::ArrayKind;
 use dsp::{uniform_pair, Biquad, Rotator};
 use flight::{Flight, FlightParams, Motion};
 pub use stats::{inter_imu_stats, InterImuStats, ResidualStats};
@@ -100,6 +114,27 @@ pub struct LogRow {
     pub t: f64,
     /// Per IMU, per channel.
     pub imu: [[f64; CHANNELS]; IMUS],
+}
+
+impl LogRow {
+    /// The nine readings of one kind for a parity monitor on
+    /// `Geometry::triads(&[Matrix3::identity(); 3])`: sensor `3·IMU + axis`
+    /// (the layout of [`crate::array::Layout::Triads`]).
+    pub fn readings(&self, kind: ArrayKind) -> [Reading<f64>; 3 * IMUS] {
+        let first = match kind {
+            ArrayKind::Accel => AX,
+            ArrayKind::Gyro => GX,
+        };
+        core::array::from_fn(|i| {
+            let v = self
+                .imu
+                .get(i / 3)
+                .and_then(|c| c.get(first + i % 3))
+                .copied()
+                .unwrap_or(f64::NAN);
+            Reading::Sample(v)
+        })
+    }
 }
 
 /// How the logger turns each IMU's sample stream into rows.
