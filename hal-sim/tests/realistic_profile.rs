@@ -175,9 +175,45 @@ fn log171_profile_matches_the_real_flight_and_white_noise_does_not() {
         let r: Vec<f64> = (0..5).map(|i| channel_ratio(&log, &sim, ch, i)).collect();
         println!("  {name}: {r:.2?}");
     }
+    // Per kind and statistic (geometric mean over the 9 cells): ±30 %.
     for r in ratios.iter().flatten() {
         assert!((0.7..=1.3).contains(r), "{ratios:?}");
     }
+    // Per channel (IMU-averaged): ±30 %, except accel-Z's largest 10-s
+    // mean, 0.69: log171's az has a few spiky 10-s excursions (max ≈ 3×
+    // its 10-s sd; the simulated slow processes give ≈ 1.8×).
+    for ch in 0..CHANNELS {
+        for i in 0..5 {
+            let r = channel_ratio(&log, &sim, ch, i);
+            let lo = if ch == AZ && i == 4 { 0.6 } else { 0.7 };
+            assert!(
+                (lo..=1.3).contains(&r),
+                "{} {}: {r}",
+                NAMES[ch],
+                STAT_NAMES[i]
+            );
+        }
+    }
+    // Per cell (channel × IMU × statistic): most within ±30 %; the rest
+    // are listed (measured: 79 of 90).
+    let mut inside = 0;
+    for ch in 0..CHANNELS {
+        for k in 0..IMUS {
+            for i in 0..5 {
+                let r = stat(&sim[ch][k], i) / stat(&log[ch][k], i);
+                if (0.7..=1.3).contains(&r) {
+                    inside += 1;
+                } else {
+                    println!(
+                        "outside ±30 %: {} IMU{k} {}: {r:.2}",
+                        NAMES[ch], STAT_NAMES[i]
+                    );
+                }
+            }
+        }
+    }
+    println!("{inside} of 90 cells within ±30 %");
+    assert!(inside >= 75, "{inside}");
     let white = white_noise_table();
     let wr = kind_ratios(&log, &white);
     println!("white-noise array / log171: {wr:.3?}");
