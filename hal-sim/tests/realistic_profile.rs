@@ -182,32 +182,24 @@ fn log171_profile_matches_the_real_flight_and_white_noise_does_not() {
     // Per channel (IMU-averaged): ±30 %, except accel-Z's largest 10-s
     // mean, 0.69: log171's az has a few spiky 10-s excursions (max ≈ 3×
     // its 10-s sd; the simulated slow processes give ≈ 1.8×).
-    for ch in 0..CHANNELS {
-        for i in 0..5 {
+    for (ch, name) in NAMES.iter().enumerate() {
+        for (i, stat_name) in STAT_NAMES.iter().enumerate() {
             let r = channel_ratio(&log, &sim, ch, i);
             let lo = if ch == AZ && i == 4 { 0.6 } else { 0.7 };
-            assert!(
-                (lo..=1.3).contains(&r),
-                "{} {}: {r}",
-                NAMES[ch],
-                STAT_NAMES[i]
-            );
+            assert!((lo..=1.3).contains(&r), "{name} {stat_name}: {r}");
         }
     }
     // Per cell (channel × IMU × statistic): most within ±30 %; the rest
     // are listed (measured: 79 of 90).
     let mut inside = 0;
-    for ch in 0..CHANNELS {
+    for (ch, name) in NAMES.iter().enumerate() {
         for k in 0..IMUS {
-            for i in 0..5 {
+            for (i, stat_name) in STAT_NAMES.iter().enumerate() {
                 let r = stat(&sim[ch][k], i) / stat(&log[ch][k], i);
                 if (0.7..=1.3).contains(&r) {
                     inside += 1;
                 } else {
-                    println!(
-                        "outside ±30 %: {} IMU{k} {}: {r:.2}",
-                        NAMES[ch], STAT_NAMES[i]
-                    );
+                    println!("outside ±30 %: {name} IMU{k} {stat_name}: {r:.2}");
                 }
             }
         }
