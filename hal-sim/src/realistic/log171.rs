@@ -4,12 +4,19 @@
 //! after the INS filters; Loiter then Acro.
 //!
 //! What is physics and what is fitted:
-//! - chains from the datasheets and the 2015 PX4 drivers ArduPilot used on
-//!   this board: MPU6000/MPU9250 at 1 kHz, digital DLPF 42/41 Hz (no
-//!   analog anti-alias filter, so vibration above 500 Hz folds); L3GD20 at
-//!   760 Hz with its 50 Hz digital LPF; LSM303D at 800 Hz behind its
-//!   773 Hz analog anti-alias filter; PX4's 30 Hz driver filter and
-//!   ArduPilot's 20 Hz INS filter on all; independent crystals (±60 ppm);
+//! - chains from the datasheets and the PX4 drivers ArduPilot 3.3 ran on
+//!   this board (their defaults, checked in the PX4 sources: MPU6000 at
+//!   1 kHz with the 42 Hz DLPF and a 30 Hz driver filter; L3GD20 at 760 Hz
+//!   with a 30 Hz driver filter; LSM303D at 800 Hz): the MPU6000/MPU9250
+//!   DLPF is digital, after the ADC, so vibration above 500 Hz folds in;
+//!   ArduPilot's 20 Hz INS filter follows (whether 3.3 ran it in series with
+//!   the driver's 30 Hz one was not checked: the fitted gains absorb it);
+//!   independent crystals (±60 ppm). One departure: PX4 set the LSM303D's
+//!   analog anti-alias filter to 50 Hz, and with it IMU1's 0.3 m/s² accel
+//!   residual needs a 15–30× local vibration gain; the profile uses the
+//!   chip's 773 Hz setting instead (gain ≈ 1.3–1.5), i.e. IMU1's accel
+//!   residual is modelled as folded vibration though its true source on
+//!   log171 is not identified;
 //! - noise densities from the datasheets (MPU6000 0.005 °/s/√Hz and
 //!   400 µg/√Hz, L3GD20 0.03 °/s/√Hz, LSM303D 150 µg/√Hz, MPU9250
 //!   0.01 °/s/√Hz and 300 µg/√Hz): negligible next to vibration, as on the
