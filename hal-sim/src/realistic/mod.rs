@@ -685,7 +685,8 @@ impl RealisticArray {
             self.motion = [self.motion[1], next];
         }
         self.step += 1;
-        self.t += self.dt;
+        // From the step count, not accumulated: exact over 10-hour runs.
+        self.t = self.step as f64 * self.dt;
         let m = self.motion[0].lerp(&self.motion[1], (k + 1) as f64 / self.motion_every as f64);
         let hover = self.p.flight.hover_throttle;
         if k == 0 {
