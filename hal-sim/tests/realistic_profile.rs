@@ -334,3 +334,20 @@ fn ten_hours_of_log171_flight() {
     }
     assert_eq!(sim.clip_counts(), [[0, 0]; IMUS]);
 }
+
+#[test]
+fn a_15_percent_scale_error_shows_as_rate_proportional_residual() {
+    let p = RealisticProfile::log171().with_duration(60.0);
+    let base: Vec<LogRow> = RealisticArray::new(&p, 4).collect();
+    let scaled: Vec<LogRow> = RealisticArray::new(&p.with_scale_error(0, GX, 0.15), 4).collect();
+    // Same seed: the difference is exactly 15 % of what IMU 0's gx chain
+    // passes of the motion (vibration and noise draws are unchanged).
+    let (mut num, mut den) = (0.0, 0.0);
+    for (a, b) in base.iter().zip(scaled.iter()) {
+        let d = b.imu[0][GX] - a.imu[0][GX];
+        num += d * a.imu[1][GX];
+        den += a.imu[1][GX] * a.imu[1][GX];
+    }
+    let slope = num / den;
+    assert!((slope - 0.15).abs() < 0.02, "{slope}");
+}

@@ -324,6 +324,23 @@ impl RealisticProfile {
         self
     }
 
+    /// The same profile with `imu`'s `channel` scale factor off by `frac`
+    /// (e.g. 0.15: the relative scale errors up to ~15 % seen between IMUs
+    /// of real boards; an in-flight relative calibration must absorb it).
+    /// Out-of-range indices leave the profile unchanged.
+    pub fn with_scale_error(mut self, imu: usize, channel: usize, frac: f64) -> Self {
+        if let Some(row) = self
+            .imus
+            .get_mut(imu)
+            .and_then(|i| i.misalignment.get_mut(channel))
+        {
+            if let Some(d) = row.get_mut(channel % 3) {
+                *d += frac;
+            }
+        }
+        self
+    }
+
     /// The same profile logged PX4-style (integrated deltas).
     pub fn integrated(mut self) -> Self {
         self.decimation = Decimation::Integrated;
