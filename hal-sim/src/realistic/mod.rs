@@ -67,10 +67,12 @@
 //!
 //! Deterministic from the seed; `no_std`, no allocation.
 
+mod chain;
 pub mod dsp;
 pub mod flight;
 mod log171;
 pub mod stats;
+mod vibration;
 
 use core::f64::consts::PI;
 
@@ -82,9 +84,11 @@ use imu_fdi::model::G0;
 use imu_fdi::parity::Reading;
 
 use crate::array::ArrayKind;
-use dsp::{uniform_pair, Biquad, Rotator};
+use chain::ChainState;
+use dsp::uniform_pair;
 use flight::{Flight, FlightParams, Motion};
 pub use stats::{inter_imu_stats, InterImuStats, ResidualStats};
+use vibration::Vibration;
 
 const DEG: f64 = PI / 180.0;
 
@@ -386,206 +390,6 @@ impl ChannelFault {
 
 /// Most faults a run carries.
 pub const MAX_CHANNEL_FAULTS: usize = 4;
-
-/// One sensor's running chain (3 axes).
-#[derive(Debug, Clone)]
-struct ChainState {
-    spec: SensorChain,
-    aa: [Biquad; 3],
-    chip: [Biquad; 3],
-    driver: [[Biquad; 2]; 3],
-    period: f64,
-    next_t: f64,
-    prev: [f64; 3],
-    latest: [f64; 3],
-    sum: [f64; 3],
-    count: u32,
-    clips: u64,
-    sigma: f64,
-}
-
-impl ChainState {
-    fn new(spec: SensorChain, internal_hz: f64) -> Self {
-        let odr = spec.odr_hz;
-        let aa = Biquad::lowpass(spec.analog_aa_hz, internal_hz);
-        let chip = Biquad::lowpass(spec.chip_lpf_hz, odr);
-        let d = spec.driver_lpf_hz.map(|f| Biquad::lowpass(f, odr));
-        Self {
-            spec,
-            aa: [aa; 3],
-            chip: [chip; 3],
-            driver: [d; 3],
-            period: 1.0 / (odr * (1.0 + spec.clock_ppm * 1e-6)),
-            next_t: spec.clock_offset_s,
-            prev: [0.0; 3],
-            latest: [0.0; 3],
-            sum: [0.0; 3],
-            count: 0,
-            clips: 0,
-            // Per-sample σ of white noise of this density at this ODR.
-            sigma: spec.noise_density * libm::sqrt(0.5 * odr),
-        }
-    }
-
-    fn settle(&mut self, x: [f64; 3]) {
-        for (i, &xi) in x.iter().enumerate() {
-            self.aa[i].settle(xi);
-            self.chip[i].settle(xi);
-            for d in self.driver[i].iter_mut() {
-                d.settle(xi);
-            }
-        }
-        self.prev = x;
-        self.latest = x;
-    }
-
-    /// One internal step: `x` is the sensing element's input at `t`
-    /// (the previous one at `t − dt`).
-    #[inline]
-    fn step(&mut self, t: f64, dt: f64, x: [f64; 3], rng: &mut Xoshiro256PlusPlus) {
-        let mut a = x;
-        if self.spec.analog_aa_hz > 0.0 {
-            for (ai, f) in a.iter_mut().zip(self.aa.iter_mut()) {
-                *ai = f.step(*ai);
-            }
-        }
-        while self.next_t <= t {
-            // The ADC samples at its own clock, between two internal steps.
-            let frac = 1.0 - (t - self.next_t) / dt;
-            for (i, &ai) in a.iter().enumerate() {
-                let v = self.prev[i] + frac * (ai - self.prev[i]);
-                let n: f64 = StandardNormal.sample(rng);
-                let mut v = v + self.sigma * n;
-                let fs = self.spec.full_scale;
-                if v > fs || v < -fs {
-                    self.clips += 1;
-                    v = v.clamp(-fs, fs);
-                }
-                if self.spec.lsb > 0.0 {
-                    v = libm::round(v / self.spec.lsb) * self.spec.lsb;
-                }
-                let c = self.chip[i].step(v);
-                self.sum[i] += c;
-                let mut y = c;
-                for d in self.driver[i].iter_mut() {
-                    y = d.step(y);
-                }
-                self.latest[i] = y;
-            }
-            self.count += 1;
-            self.next_t += self.period;
-        }
-        self.prev = a;
-    }
-
-    fn take(&mut self, decimation: Decimation) -> [f64; 3] {
-        match decimation {
-            Decimation::PointSample => self.latest,
-            Decimation::Integrated => {
-                let out = if self.count > 0 {
-                    self.sum.map(|s| s / self.count as f64)
-                } else {
-                    self.latest
-                };
-                self.sum = [0.0; 3];
-                self.count = 0;
-                out
-            }
-        }
-    }
-}
-
-/// The common vibration source.
-#[derive(Debug, Clone)]
-struct Vibration {
-    p: VibrationParams,
-    rotors: [Rotator; 2],
-    /// Complex coupling of each harmonic into each channel (random phase).
-    coupling: [[Rotator; CHANNELS]; 3],
-    band: [Biquad; CHANNELS],
-    /// Gain from unit uniform noise to the band-pass output sd of 1.
-    band_gain: f64,
-}
-
-impl Vibration {
-    fn new(p: VibrationParams, internal_hz: f64, rng: &mut Xoshiro256PlusPlus) -> Self {
-        let mut phase = || {
-            let (u, _) = uniform_pair(rng);
-            Rotator::new(u * PI / 1.732_050_807_568_877_2)
-        };
-        let rotors = [phase(), phase()];
-        let coupling = core::array::from_fn(|_| core::array::from_fn(|_| phase()));
-        let (fc, q) = p.broadband_band;
-        let band = Biquad::bandpass(fc, q, internal_hz);
-        // Noise-equivalent bandwidth of the RBJ band-pass ≈ π fc /(2Q)
-        // (one-sided), so unit white noise at fs gives sd² ≈ 2·ENBW/fs.
-        let enbw = PI * fc / (2.0 * q);
-        let band_gain = 1.0 / libm::sqrt((2.0 * enbw / internal_hz).min(1.0));
-        Self {
-            p,
-            rotors,
-            coupling,
-            band: [band; CHANNELS],
-            band_gain,
-        }
-    }
-
-    #[inline]
-    fn step(
-        &mut self,
-        throttle: f64,
-        hover: f64,
-        dt: f64,
-        rng: &mut Xoshiro256PlusPlus,
-    ) -> [f64; CHANNELS] {
-        let (f0, f1) = self.p.blade_pass_hz;
-        let f = f0 + (f1 - f0) * libm::sqrt(throttle.clamp(0.0, 1.0));
-        let d = 2.0 * PI * f * dt;
-        self.rotors[0].advance(d);
-        self.rotors[1].advance(d * (1.0 + self.p.rotor_spread));
-        let h1 = self.rotors;
-        let h2 = [h1[0].square(), h1[1].square()];
-        let h3 = [h2[0].mul(&h1[0]), h2[1].mul(&h1[1])];
-        let line = if self.p.line_order > 0 {
-            let mut z = h1;
-            for _ in 1..self.p.line_order {
-                z = [z[0].mul(&h1[0]), z[1].mul(&h1[1])];
-            }
-            Some(z)
-        } else {
-            None
-        };
-        let r = throttle / hover.max(1e-3);
-        let scale = if self.p.throttle_exponent == 2.0 {
-            r * r
-        } else {
-            libm::pow(r, self.p.throttle_exponent)
-        };
-        let (u0, u1) = uniform_pair(rng);
-        let (u2, u3) = uniform_pair(rng);
-        let (u4, u5) = uniform_pair(rng);
-        let u = [u0, u1, u2, u3, u4, u5];
-        let mut out = [0.0; CHANNELS];
-        for (ch, o) in out.iter_mut().enumerate() {
-            let mut v = 0.0;
-            for (h, z) in [h1, h2, h3].iter().enumerate() {
-                let c = &self.coupling[h][ch];
-                // Re(c · (z_a + z_b)/√2): the two rotor pairs, unit rms sum.
-                let re = (z[0].re + z[1].re) * c.re - (z[0].im + z[1].im) * c.im;
-                v += self.p.harmonic_amp[h][ch] * re * core::f64::consts::FRAC_1_SQRT_2;
-            }
-            if let Some(z) = line {
-                // Its coupling phase: the fundamental's, rotated.
-                let c = &self.coupling[0][ch];
-                let re = (z[0].re + z[1].re) * c.im + (z[0].im + z[1].im) * c.re;
-                v += self.p.line_amp[ch] * re * core::f64::consts::FRAC_1_SQRT_2;
-            }
-            v += self.p.broadband_sd[ch] * self.band_gain * self.band[ch].step(u[ch]);
-            *o = scale * v;
-        }
-        out
-    }
-}
 
 #[derive(Debug, Clone)]
 struct ImuState {
