@@ -3,8 +3,10 @@
 //! The simulated hardware for `imu-fdi`: deterministic vehicle trajectories
 //! with exact IMU truth ([`trajectory`]), a datasheet-class IMU error model
 //! ([`imu_model`]), aiding sensors at their own rates, fault injection
-//! ([`fault`]) and scenarios as data ([`scenario`]), all `no_std` so the same
-//! models can run inside firmware. With the default `std` feature it adds the
+//! ([`fault`]) and scenarios as data ([`scenario`]), a three-IMU flight
+//! that looks like a real one (vibration, each IMU's signal chain, the
+//! logger's decimation; fitted to ArduPilot log171: [`realistic`]), all
+//! `no_std` so the same models can run inside firmware. With the default `std` feature it adds the
 //! scenario runner and SPEC §9 metrics ([`runner`], [`metrics`]), the SPEC §10
 //! replay format ([`replay`]) and the `imu-fdi-sim` CLI.
 #![cfg_attr(not(feature = "std"), no_std)]
@@ -17,6 +19,7 @@ pub mod imu_model;
 pub mod ots;
 #[cfg(all(target_os = "none", feature = "sil"))]
 pub mod qemu;
+pub mod realistic;
 pub mod scenario;
 pub mod setup;
 pub mod sim;
