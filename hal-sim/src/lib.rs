@@ -39,6 +39,8 @@ pub mod log_import;
 #[cfg(feature = "std")]
 pub mod metrics;
 #[cfg(feature = "std")]
+pub mod parity_campaign;
+#[cfg(feature = "std")]
 pub mod parity_replay;
 #[cfg(feature = "std")]
 pub mod plot;

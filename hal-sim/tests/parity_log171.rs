@@ -77,7 +77,8 @@ fn accelerometer_false_alarms_in_normal_flight_stay_as_measured() {
     // On this 2015 board the a_z of the three IMUs part by up to 2 m/s² for
     // seconds under vibration; the rectification regressors remove most of
     // it but not all. Measured over nine training starts (60, 65, …, 100 s):
-    // 10 alarm events before the crash, 2 healthy sensors isolated.
+    // 1 alarm event before the crash (0.3 s at 147.8 s, training from
+    // 75 s), no sensor isolated.
     let log = log();
     let (mut events, mut isolations) = (0, 0);
     for ts in [60.0, 65.0, 70.0, 75.0, 80.0, 85.0, 90.0, 95.0, 100.0] {
@@ -85,8 +86,8 @@ fn accelerometer_false_alarms_in_normal_flight_stay_as_measured() {
         events += r.alarms.iter().filter(|a| a.0 < CRASH).count();
         isolations += r.isolations.iter().filter(|a| a.1 < CRASH).count();
     }
-    assert!(events <= 10, "{events}");
-    assert!(isolations <= 2, "{isolations}");
+    assert!(events <= 1, "{events}");
+    assert!(isolations == 0, "{isolations}");
 }
 
 #[test]
@@ -124,22 +125,22 @@ fn injected_gyro_steps_are_isolated_at_the_measured_rates() {
     )
     .unwrap();
     let axis = |a: usize| move |c: &StepCase| c.injection.channel == 3 + a;
-    // 1 °/s, measured: z 160/174, y 87/174, x 1/174 (IMU0's x gyro reads
+    // 1 °/s, measured: z 154/174, y 107/174, x 1/174 (IMU0's x gyro reads
     // 12 °/s of aliased vibration per sample: with it, a step on IMU1 or
     // IMU2 x cannot be told from the opposite step on the other one within
-    // 10 s at the isolation margin); 5 cases with a false alarm.
+    // 10 s at the isolation margin); 6 cases with a false alarm.
     let (z, n) = passes(&cases, axis(2));
-    assert!(z >= 158 && n == 174, "{z}/{n}");
+    assert!(z >= 152 && n == 174, "{z}/{n}");
     let (y, _) = passes(&cases, axis(1));
-    assert!(y >= 85, "{y}");
+    assert!(y >= 105, "{y}");
     let fa = cases.iter().filter(|c| c.false_alarm).count();
-    assert!(fa <= 5, "{fa}");
-    // Every IMU is covered: z steps on each IMU isolated in ≥ 50 of 58 cases.
+    assert!(fa <= 6, "{fa}");
+    // Every IMU is covered: z steps on each IMU isolated in ≥ 45 of 58 cases.
     for imu in 0..3 {
         let (ok, _) = passes(&cases, |c| {
             c.injection.imu == imu && c.injection.channel == 5
         });
-        assert!(ok >= 50, "imu {imu}: {ok}");
+        assert!(ok >= 45, "imu {imu}: {ok}");
     }
     // Delays: every isolation within the 10 s, median a few seconds.
     let mut d: Vec<f64> = cases.iter().filter_map(|c| c.delay).collect();
@@ -161,18 +162,20 @@ fn injected_accelerometer_steps_are_isolated_at_the_measured_rates() {
         CRASH,
     )
     .unwrap();
-    // 0.3 m/s², measured: x 153/174, y 147/174, z 55/174 (the a_z
-    // vibration events above), 50 cases with a false alarm.
+    // 0.3 m/s², measured: x 153/174, y 164/174, z 72/174 (the a_z
+    // vibration events above), 1 case with a false alarm.
     let axis = |a: usize| move |c: &StepCase| c.injection.channel == a;
     let (x, _) = passes(&cases, axis(0));
     let (y, _) = passes(&cases, axis(1));
     let (z, _) = passes(&cases, axis(2));
-    assert!(x >= 150 && y >= 144 && z >= 52, "{x} {y} {z}");
+    assert!(x >= 150 && y >= 160 && z >= 70, "{x} {y} {z}");
+    let fa = cases.iter().filter(|c| c.false_alarm).count();
+    assert!(fa <= 1, "{fa}");
     for imu in 0..3 {
         let (ok, _) = passes(&cases, |c| {
             c.injection.imu == imu && c.injection.channel < 2
         });
-        assert!(ok >= 90, "imu {imu}: {ok}");
+        assert!(ok >= 100, "imu {imu}: {ok}");
     }
 }
 

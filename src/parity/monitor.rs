@@ -331,7 +331,10 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         if cfg.window_blocks == 0 || cfg.window_blocks > W || cfg.block_len == 0 {
             return Err(ConfigError::Window);
         }
-        if cfg.detector == ParityDetector::Multiscale && cfg.multiscale.check(W).is_err() {
+        if cfg.detector == ParityDetector::Multiscale
+            && (cfg.multiscale.check(W).is_err()
+                || Multiscale::<T, N, W>::thresholds(&cfg.multiscale).is_none())
+        {
             return Err(ConfigError::Multiscale);
         }
         if !(cfg.false_alarm > 0.0 && cfg.false_alarm < 0.5)
@@ -401,9 +404,11 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// Creates the multi-scale tests when they are the detector.
     fn with_multiscale(mut self) -> Self {
         if self.cfg.detector == ParityDetector::Multiscale {
-            let h = chi_square_upper_quantile(self.cfg.multiscale.false_alarm, 1)
-                .map(T::lit)
-                .unwrap_or(T::lit(23.9));
+            // `new` has checked the configuration, so the quantiles exist;
+            // if one did not, no multi-scale tests means no alarms at all,
+            // so fall back to far stricter thresholds rather than none.
+            let h = Multiscale::<T, N, W>::thresholds(&self.cfg.multiscale)
+                .unwrap_or([T::lit(1e3); super::multiscale::DOF_STEPS]);
             self.ms = Some(Multiscale::new(self.cfg.multiscale, self.space.dim(), h));
         }
         self
@@ -766,7 +771,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                     self.ms_trained = true;
                 } else {
                     // Degenerate training data: start again.
-                    *ms = Multiscale::new(cfg, self.space.dim(), ms.threshold());
+                    *ms = Multiscale::new(cfg, self.space.dim(), ms.threshold_set());
                     self.ms_blocks = 0;
                 }
             }
@@ -907,7 +912,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                         ms.transform(&c, sub.dim());
                     } else {
                         // Failed while training: train the reduced set.
-                        *ms = Multiscale::new(self.cfg.multiscale, sub.dim(), ms.threshold());
+                        *ms = Multiscale::new(self.cfg.multiscale, sub.dim(), ms.threshold_set());
                         self.ms_blocks = 0;
                     }
                 }

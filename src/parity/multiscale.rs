@@ -33,8 +33,13 @@
 //!    where Σ is *that window length's* covariance learned from the healthy
 //!    flight (so time correlation is in it by construction) plus the
 //!    calibration's own prediction uncertainty `φ̄ᵀ P φ̄ Σ_b`. Under no fault
-//!    each score is χ²(1), so the threshold is the χ²(1) quantile at the
-//!    configured false-alarm probability per decision;
+//!    and a known Σ each score would be χ²(1); Σ is *estimated*, from a
+//!    memory of `variance_blocks` blocks that holds only
+//!    `variance_blocks / n` independent windows of length `n`, so the
+//!    score is the square of a Student t with that many degrees of freedom
+//!    and each length's threshold is that t quantile squared at the
+//!    configured false-alarm probability (heavier tails for the long
+//!    windows, whose covariance rests on fewer independent samples);
 //! 5. names a sensor only when its hypothesis beats the runner-up by a
 //!    likelihood-ratio margin: with a noisy third sensor two hypotheses can
 //!    explain a window almost equally well, and naming the wrong one would
@@ -43,6 +48,7 @@
 use nalgebra::{SMatrix, SVector, Vector3};
 
 use crate::math::{cholesky, cholesky_solve_right, Real};
+use crate::stats::student_t_upper_quantile;
 
 /// Sensors whose own vibration energy is a regressor (the first nine).
 pub const VIBRATION_REGRESSORS: usize = 9;
@@ -51,6 +57,8 @@ pub const VIBRATION_REGRESSORS: usize = 9;
 pub const REGRESSORS: usize = 7 + VIBRATION_REGRESSORS;
 /// Number of window lengths tested.
 pub const SCALES: usize = 3;
+/// Entries of the threshold table: 2 to 2¹⁰ degrees of freedom.
+pub const DOF_STEPS: usize = 10;
 
 type Phi<T> = SVector<T, REGRESSORS>;
 
@@ -63,7 +71,9 @@ pub struct MultiscaleConfig<T> {
     /// monitor's `W`.
     pub scales: [u16; SCALES],
     /// False-alarm probability of one score (one sensor hypothesis, one
-    /// window length, one decision); the threshold is its χ²(1) quantile.
+    /// window length, one decision, both signs); the threshold is the
+    /// squared Student-t quantile at `false_alarm / 2` with
+    /// `variance_blocks / length` degrees of freedom.
     pub false_alarm: f64,
     /// Likelihood-ratio margin (χ² units) by which the named sensor's
     /// hypothesis must beat the runner-up before it is isolated.
@@ -85,7 +95,10 @@ pub struct MultiscaleConfig<T> {
     /// Memory of the learned covariances, blocks.
     pub variance_blocks: T,
     /// Learning is frozen while any score is at or above this fraction of
-    /// the threshold, and for the longest window after it.
+    /// the threshold, and for the longest window after it. Not much below
+    /// one half: covariances learned only from windows that look very
+    /// quiet underestimate the spread (censoring) — at a quarter, the
+    /// realistic profile gave 35 false-alarm events in 2 h, at a half 4.
     pub learn_below: T,
     /// Ridge on each leakage (scale/misalignment) coefficient, unit² per
     /// block: the prior that the IMUs agree in scale.
@@ -107,12 +120,13 @@ pub struct MultiscaleConfig<T> {
 
 impl<T: Real> MultiscaleConfig<T> {
     /// Defaults for blocks of ≈ 0.25 s: windows of 10, 20, 40 blocks,
-    /// α = 1e-6 per score (χ²(1) threshold 23.9: with 4 decisions/s and
-    /// three window lengths that is ≈ 0.4 expected false scores in 10 h if
-    /// the learned covariances were exact), isolation margin 10.8 (χ²(1)
-    /// at 1e-3), Huber excess 0.5, calibration memory 480 blocks (2 min),
-    /// covariance memory 480 blocks, learning frozen above a quarter of the
-    /// threshold. `unit` is the sensor's natural scale (1 °/s for gyros,
+    /// α = 1e-6 per score (with 4 decisions/s and three window lengths
+    /// ≈ 0.4 expected false scores in 10 h if the statistic were exact),
+    /// isolation margin 10.8 (χ²(1) at 1e-3), Huber excess 0.5,
+    /// calibration memory 480 blocks (2 min), covariance memory 960 blocks
+    /// (4 min: 96, 48 and 24 degrees of freedom for the three lengths,
+    /// thresholds 28, 33 and 48 in χ² units), learning frozen above a
+    /// quarter of the threshold. `unit` is the sensor's natural scale (1 °/s for gyros,
     /// 0.1 m/s² for accelerometers) and sets the ridges and offset limit.
     pub fn new(unit: T, offset_limit: T) -> Self {
         Self {
@@ -122,8 +136,8 @@ impl<T: Real> MultiscaleConfig<T> {
             huber: T::lit(0.5),
             gross_factor: T::lit(50.0),
             calibration_blocks: T::lit(480.0),
-            variance_blocks: T::lit(480.0),
-            learn_below: T::lit(0.25),
+            variance_blocks: T::lit(960.0),
+            learn_below: T::lit(0.5),
             ridge_motion: unit * unit * T::lit(10.0),
             ridge_skew: unit * unit * T::lit(0.1),
             ridge_vibration: unit * unit * T::lit(0.1),
@@ -232,13 +246,49 @@ pub struct Multiscale<T: Real, const N: usize, const W: usize> {
     filled: usize,
     /// Blocks since a score was last at or above the learning fraction.
     quiet_blocks: u32,
-    threshold: T,
+    /// Squared t quantiles by degrees of freedom (see
+    /// [`thresholds`](Self::thresholds)).
+    thresholds: [T; DOF_STEPS],
 }
 
 impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
-    /// Fresh tests for a parity space of dimension `dim` with the χ²(1)
-    /// threshold `threshold`.
-    pub fn new(cfg: MultiscaleConfig<T>, dim: usize, threshold: T) -> Self {
+    /// Squared Student-t quantiles at `cfg.false_alarm / 2` for
+    /// `2, 4, 8, …, 2^DOF_STEPS` degrees of freedom (software `f64`; once, at
+    /// configuration). `None` when a quantile cannot be computed.
+    pub fn thresholds(cfg: &MultiscaleConfig<T>) -> Option<[T; DOF_STEPS]> {
+        let mut out = [T::zero(); DOF_STEPS];
+        for (j, h) in out.iter_mut().enumerate() {
+            let nu = libm::exp2(j as f64 + 1.0);
+            let t = student_t_upper_quantile(cfg.false_alarm * 0.5, nu).ok()?;
+            *h = T::lit(t * t);
+        }
+        Some(out)
+    }
+
+    /// Threshold for a covariance resting on `nu` independent windows:
+    /// the table interpolated in `log2 nu`, clamped to its ends.
+    fn threshold_for(&self, nu: T) -> T {
+        let x = (nu.to_f64().max(2.0)).log2() - 1.0;
+        let j = (x.floor().max(0.0) as usize).min(DOF_STEPS - 1);
+        let f = T::lit((x - j as f64).clamp(0.0, 1.0));
+        let a = self.thresholds.get(j).copied().unwrap_or(T::lit(1e6));
+        let b = self.thresholds.get(j + 1).copied().unwrap_or(a);
+        a + (b - a) * f
+    }
+
+    /// Independent windows of length `len` in the covariance memory. The
+    /// steady-state value, also right after training: counting only the
+    /// training's few windows would switch the long windows off for the
+    /// first minutes (tried: it halved the detections on log171); the
+    /// conservative start of the long windows' covariances covers that
+    /// period instead.
+    fn dof(&self, len: u16) -> T {
+        self.cfg.variance_blocks / T::lit(f64::from(len.max(1)))
+    }
+
+    /// Fresh tests for a parity space of dimension `dim` with the
+    /// thresholds from [`thresholds`](Self::thresholds).
+    pub fn new(cfg: MultiscaleConfig<T>, dim: usize, thresholds: [T; DOF_STEPS]) -> Self {
         let ridge = Phi::<T>::from_fn(|i, _| match i {
             0 => T::lit(1e-9),
             1..=3 => cfg.ridge_motion,
@@ -261,13 +311,13 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             head: 0,
             filled: 0,
             quiet_blocks: 0,
-            threshold,
+            thresholds,
         }
     }
 
-    /// The χ²(1) threshold of every score.
-    pub fn threshold(&self) -> T {
-        self.threshold
+    /// The threshold table (squared t quantiles by degrees of freedom).
+    pub fn threshold_set(&self) -> [T; DOF_STEPS] {
+        self.thresholds
     }
 
     /// Regressor vector of a block with mean `x`, centred difference `dx`
@@ -453,10 +503,11 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         self.filled = 0;
         self.head = 0;
         self.quiet_blocks = 0;
-        // The training estimate weighs as much as the training blocks that
-        // made it; each quiet block in flight then adds one observation, up
-        // to the fixed memory `variance_blocks`.
-        self.updates = train_blocks;
+        // The training estimate rests on the residual blocks that made it;
+        // each quiet block in flight then adds one, up to the fixed memory
+        // `variance_blocks`; the thresholds follow the degrees of freedom.
+        self.updates = n as u32;
+        let _ = train_blocks;
         Some(())
     }
 
@@ -532,10 +583,17 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         let means = self.window_means();
         let mut best_ratio = T::zero();
         let mut isolate: Option<(usize, T)> = None;
-        for (i, (m, cov)) in means.iter().zip(self.window_cov.iter()).enumerate() {
+        let lens = self.cfg.scales;
+        for (i, ((m, cov), len)) in means
+            .iter()
+            .zip(self.window_cov.iter())
+            .zip(lens.iter())
+            .enumerate()
+        {
             let Some((rbar, phibar)) = m else {
                 continue;
             };
+            let h = &self.threshold_for(self.dof(*len));
             let total = cov + self.block_cov * self.prediction_weight(phibar);
             let Ok(l) = cholesky(&pad(&total, self.dim)) else {
                 continue;
@@ -544,7 +602,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             let Some((k, score, bias)) = best else {
                 continue;
             };
-            let ratio = score / self.threshold;
+            let ratio = score / *h;
             let margin = score - second;
             if ratio > T::one() && isolate.is_none_or(|(_, m)| margin > m) {
                 isolate = Some((k, margin));
@@ -569,7 +627,9 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             if let Ok(l) = cholesky(&pad(cov, self.dim)) {
                 let (best, second) = best_two(&l, v, &rbar, active);
                 if let Some((k, score, bias)) = best {
-                    let ratio = score / (self.threshold * self.cfg.gross_factor);
+                    let ratio = score
+                        / (self.threshold_for(self.dof(self.cfg.scales[0]))
+                            * self.cfg.gross_factor);
                     if ratio > T::one() && ratio > best_ratio {
                         best_ratio = ratio;
                         out.ratio = ratio;
