@@ -678,3 +678,100 @@ pub fn power_up_table(
         })
         .collect()
 }
+
+/// The replay of both sensor kinds as one JSON object (the schema of
+/// `imu-fdi-sim parity-replay --json`): `{"gyro": {"monitoring_from_s",
+/// "alarms": [{"start_s", "end_s", "sensor"}], "isolations": [{"sensor",
+/// "t_s"}], "statuses": [{"sensor", "status", "t_s"}]}, "accel": {…}}`,
+/// sensor = 3 × IMU + axis, times in seconds of the file's clock, `null`
+/// where a value does not exist (no monitoring, no suspect).
+pub fn replay_json(
+    log: &ImuLog,
+    train_start: f64,
+    train_s: f64,
+    method: ParityMethod,
+    injection: Option<Injection>,
+) -> Result<serde_json::Value> {
+    let mut out = serde_json::Map::new();
+    for (name, kind) in [("gyro", ArrayKind::Gyro), ("accel", ArrayKind::Accel)] {
+        let inj = injection.filter(|i| match kind {
+            ArrayKind::Gyro => i.channel >= 3,
+            ArrayKind::Accel => i.channel < 3,
+        });
+        let r = replay_parity_with(log, kind, train_start, train_s, inj, method)?;
+        let alarms: Vec<_> = r
+            .alarms
+            .iter()
+            .map(|(a, b, k)| serde_json::json!({"start_s": a, "end_s": b, "sensor": k}))
+            .collect();
+        let isolations: Vec<_> = r
+            .isolations
+            .iter()
+            .map(|(k, t)| serde_json::json!({"sensor": k, "t_s": t}))
+            .collect();
+        let statuses: Vec<_> = r
+            .statuses
+            .iter()
+            .map(|(k, s, t)| {
+                serde_json::json!({"sensor": k, "status": format!("{s:?}").to_lowercase(), "t_s": t})
+            })
+            .collect();
+        out.insert(
+            name.into(),
+            serde_json::json!({
+                "monitoring_from_s": r.monitoring_from,
+                "alarms": alarms,
+                "isolations": isolations,
+                "statuses": statuses,
+            }),
+        );
+    }
+    Ok(serde_json::Value::Object(out))
+}
+
+/// The step table as text (what `imu-fdi-sim parity-table` prints): pass
+/// counts per IMU × axis, false alarms, and the delays.
+pub fn format_step_table(kind: ArrayKind, size: f64, cases: &[StepCase], end_s: f64) -> String {
+    use std::fmt::Write;
+    let (unit, scale) = match kind {
+        ArrayKind::Gyro => ("°/s", 180.0 / std::f64::consts::PI),
+        ArrayKind::Accel => ("m/s²", 1.0),
+    };
+    let cases: Vec<_> = cases
+        .iter()
+        .filter(|c| c.injection.start + STEP_ISOLATE_WITHIN_S < end_s)
+        .collect();
+    let pass = |c: &StepCase| c.isolated && !c.false_alarm;
+    let ok = cases.iter().filter(|c| pass(c)).count();
+    let fa = cases.iter().filter(|c| c.false_alarm).count();
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{kind:?} step {:.3} {unit}: {ok}/{} isolated to the right sensor within {STEP_ISOLATE_WITHIN_S} s with no other alarm; {fa} cases with a false alarm",
+        size * scale,
+        cases.len()
+    );
+    let _ = writeln!(s, "  {:>5} {:>9} {:>9} {:>9}", "", "x", "y", "z");
+    for imu in 0..3 {
+        let cells: Vec<String> = (0..3)
+            .map(|axis| {
+                let sel: Vec<_> = cases
+                    .iter()
+                    .filter(|c| c.injection.imu == imu && c.injection.channel % 3 == axis)
+                    .collect();
+                format!("{}/{}", sel.iter().filter(|c| pass(c)).count(), sel.len())
+            })
+            .collect();
+        let _ = writeln!(s, "  imu{imu} {:>9} {:>9} {:>9}", cells[0], cells[1], cells[2]);
+    }
+    let mut d: Vec<f64> = cases.iter().filter_map(|c| c.delay).collect();
+    d.sort_by(f64::total_cmp);
+    if let (Some(first), Some(last)) = (d.first(), d.last()) {
+        let _ = writeln!(
+            s,
+            "  isolation delay: median {:.1} s, range {first:.1}-{last:.1} s",
+            d.get(d.len() / 2).copied().unwrap_or(f64::NAN)
+        );
+    }
+    s
+}
