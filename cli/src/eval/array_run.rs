@@ -8,8 +8,8 @@ use nalgebra::{SVector, Vector3};
 use imu_fdi::math::Real;
 use imu_fdi::parity::{Geometry, ParityConfig, ParityMonitor, ParityPhase, Reading, SensorStatus};
 
-use crate::array::{ArrayKind, ArraySim, ArraySpec, Layout};
-use crate::baseline::{ArduPilotLike, Px4Like};
+use hal_sim::array::{ArrayKind, ArraySim, ArraySpec, Layout};
+use hal_sim::baseline::{ArduPilotLike, Px4Like};
 
 /// Window capacity (blocks) of the monitors the runner builds.
 pub const WINDOW: usize = 32;

@@ -8,8 +8,8 @@ use core::f64::consts::PI;
 use anyhow::Result;
 use rayon::prelude::*;
 
-use crate::array::{ArrayFault, ArrayFaultKind, ArrayKind, ArraySpec, Layout};
-use crate::array_run::{array_config, run_array, ArrayRun, MethodOutcome};
+use crate::eval::array_run::{array_config, run_array, ArrayRun, MethodOutcome};
+use hal_sim::array::{ArrayFault, ArrayFaultKind, ArrayKind, ArraySpec, Layout};
 
 /// The five methods compared.
 pub const METHODS: [&str; 5] = [

@@ -9,8 +9,8 @@ use nalgebra::Matrix3;
 
 use imu_fdi::parity::{Geometry, ParityConfig, ParityMonitor, Reading, SensorStatus};
 
-use crate::array::ArrayKind;
-use crate::baseline::{ArduPilotLike, Px4Like};
+use hal_sim::array::ArrayKind;
+use hal_sim::baseline::{ArduPilotLike, Px4Like};
 
 const AXES: [&str; 6] = ["ax", "ay", "az", "gx", "gy", "gz"];
 /// Most IMUs a replayed log may carry.
@@ -32,7 +32,7 @@ pub struct ImuLog {
 /// Reads a SPEC §10 CSV with `imu{k}_…` columns (k = 0, 1, …). Errors name
 /// the file and line; rows with non-increasing `t` are skipped and counted.
 pub fn read_imu_log(path: &Path) -> Result<ImuLog> {
-    let (mut rdr, headers) = crate::log_import::open_csv(path)?;
+    let (mut rdr, headers) = crate::io::log_import::open_csv(path)?;
     let find = |name: &str| headers.iter().position(|h| h == name);
     let t_col = find("t").with_context(|| format!("{}: no `t` column", path.display()))?;
     let mut cols: Vec<[usize; 6]> = Vec::new();

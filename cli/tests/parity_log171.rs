@@ -9,7 +9,7 @@
 use std::path::Path;
 
 use hal_sim::array::ArrayKind;
-use hal_sim::parity_replay::{read_imu_log, replay_parity, ImuLog, Injection};
+use imu_fdi_cli::eval::parity_replay::{read_imu_log, replay_parity, ImuLog, Injection};
 
 /// DroneKit-LA: "IMU vs IMU2 gyro differ, max 11.7 deg/s", this interval.
 const ANALYSER: (f64, f64) = (239.825, 241.335);

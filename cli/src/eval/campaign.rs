@@ -17,11 +17,11 @@ use rayon::prelude::*;
 
 use imu_fdi::monitor::Phase;
 
-use crate::fault::{FaultKind, FaultRow};
-use crate::metrics::evaluate;
-use crate::runner::{run, RunOptions};
-use crate::scenario::Scenario;
-use crate::stats_ci::{mean_ci, poisson_ci, wilson_ci};
+use crate::eval::stats_ci::{mean_ci, poisson_ci, wilson_ci};
+use hal_sim::fault::{FaultKind, FaultRow};
+use hal_sim::metrics::evaluate;
+use hal_sim::runner::{run, RunOptions};
+use hal_sim::scenario::Scenario;
 
 /// One run of a campaign: what was injected and what the monitor did.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]

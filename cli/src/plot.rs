@@ -10,8 +10,8 @@ use anyhow::{anyhow, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::array::{ArraySim, ArraySpec};
-use crate::runner::Trace;
+use hal_sim::array::{ArraySim, ArraySpec};
+use hal_sim::runner::Trace;
 
 const CHANNELS: [&str; 6] = ["a_x", "a_y", "a_z", "p", "q", "r"];
 /// Figure size, px.
@@ -174,7 +174,7 @@ pub fn plot_trace(trace: &Trace, fig: TraceFigure, stem: &Path) -> Result<Vec<Pa
     let mut panels = Vec::new();
     for ch in 0..6 {
         let (u, k) = unit(ch);
-        let col = |f: &dyn Fn(&crate::runner::TraceRow) -> f64| -> Vec<(f64, f64)> {
+        let col = |f: &dyn Fn(&hal_sim::runner::TraceRow) -> f64| -> Vec<(f64, f64)> {
             rows.iter().map(|r| (r.t, f(r))).collect()
         };
         let series: Series = match fig {
@@ -247,7 +247,7 @@ pub fn plot_parity<const N: usize>(
     let dirs: [[f32; 3]; N] = spec.directions.map(|d| d.map(|x| x as f32));
     let g = Geometry::<f32, N>::new(&dirs).map_err(|e| anyhow!("{e:?}"))?;
     let sim = ArraySim::new(spec, seed);
-    let mut cfg = crate::array_run::array_config::<f32, N>(spec);
+    let mut cfg = crate::eval::array_run::array_config::<f32, N>(spec);
     cfg.set_lead_in(sim.lead_in_samples());
     let mut m = ParityMonitor::<f32, N, 32>::new(&g, cfg).map_err(|e| anyhow!("{e:?}"))?;
     let onset = spec

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 
-use crate::scenario::Scenario;
+use hal_sim::scenario::Scenario;
 
 /// Reads a scenario file; errors name the file and, for syntax or field
 /// errors, the line and column.

@@ -235,7 +235,7 @@ pub fn write_replay_csv(out: &Path, rows: &ReplayRows) -> Result<ImportSummary> 
 /// ATT is ArduPilot's own estimate from the same IMUs: not an independent
 /// sensor (SPEC §8 S6), so give it a wide R when replaying.
 pub fn dataflash_to_replay_csv(input: &Path, out: &Path) -> Result<ImportSummary> {
-    let log = crate::parity_replay::read_dataflash_imus(input)?;
+    let log = crate::eval::parity_replay::read_dataflash_imus(input)?;
     let n = log.t.len();
     let mut gnss: Vec<Option<[f64; 3]>> = vec![None; n];
     let mut att: Vec<Option<[f64; 3]>> = vec![None; n];

@@ -7,8 +7,8 @@ use anyhow::{bail, Context, Result};
 use imu_fdi::model::{AidingKind, ImuVec, MeasVec, Measurement, CHANNEL_NAMES};
 use imu_fdi::monitor::{Phase, UkfMonitor, UkfMonitorConfig};
 
-use crate::scenario::Scenario;
-use crate::sim::Simulator;
+use hal_sim::scenario::Scenario;
+use hal_sim::sim::Simulator;
 
 const IMU_COLS: [&str; 6] = [
     "imu0_ax", "imu0_ay", "imu0_az", "imu0_gx", "imu0_gy", "imu0_gz",
@@ -103,7 +103,7 @@ pub struct ReplayOptions {
     /// Rows after this time are ignored.
     pub to_s: Option<f64>,
     /// Faults to inject, and the IMU instance they go on.
-    pub inject: Option<(crate::inject::FaultTable, usize)>,
+    pub inject: Option<(crate::eval::inject::FaultTable, usize)>,
     /// Seed of injected noise.
     pub seed: u64,
     /// Tuning.
@@ -169,7 +169,7 @@ pub fn flight_config(
     c.meas_sigma = MeasVec::new(opts.vel_sigma, opts.vel_sigma, opts.vel_sigma, r, p, y);
     // Vibration dominates a flying vehicle's IMU noise; measure it, with a
     // floor at the datasheet-class default (a bench log reads ~0).
-    let sigma = crate::inject::difference_sigma(imu);
+    let sigma = crate::eval::inject::difference_sigma(imu);
     for (i, s) in sigma.iter().enumerate() {
         if let Some(q) = c.process_noise.psd.get_mut(i) {
             *q = q.max(s * s * dt);
@@ -190,7 +190,7 @@ pub fn replay(
     sim_cfg: impl Fn(AidingKind) -> UkfMonitorConfig<f64>,
     opts: &ReplayOptions,
 ) -> Result<ReplaySummary> {
-    let (mut rdr, headers) = crate::log_import::open_csv(input)?;
+    let (mut rdr, headers) = crate::io::log_import::open_csv(input)?;
     let col: HashMap<&str, usize> = headers.iter().enumerate().map(|(i, h)| (h, i)).collect();
     let find = |name: &str| col.get(name).copied();
     let t_idx = find("t").with_context(|| format!("{}: missing column 't'", input.display()))?;
@@ -317,8 +317,9 @@ pub fn replay(
                 imu_idx.len()
             );
         }
-        let sigma = crate::inject::difference_sigma(rows.iter().filter_map(|r| r.imus.get(*k)));
-        let mut inj = crate::inject::Injector::new(table.clone(), sigma, opts.seed);
+        let sigma =
+            crate::eval::inject::difference_sigma(rows.iter().filter_map(|r| r.imus.get(*k)));
+        let mut inj = crate::eval::inject::Injector::new(table.clone(), sigma, opts.seed);
         for r in &mut rows {
             if let Some(s) = r.imus.get_mut(*k) {
                 let tr = inj.apply(r.t, s);

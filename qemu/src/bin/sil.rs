@@ -20,7 +20,7 @@ use cortex_m_rt::{entry, exception, ExceptionFrame};
 use cortex_m_semihosting::{debug, hprintln};
 use hal_sim::Scenario;
 
-use hal_sim::qemu::instructions;
+use imu_fdi_qemu::instructions;
 
 const PAINT: u32 = 0xcccc_cccc;
 

@@ -8,8 +8,8 @@ use std::f64::consts::{FRAC_PI_2, PI};
 use hal_sim::array::{
     cone6_directions, triad_directions, ArrayFault, ArrayFaultKind, ArrayKind, ArraySpec, Layout,
 };
-use hal_sim::array_run::{array_config, run_array, ArrayRun};
 use imu_fdi::parity::SensorStatus;
+use imu_fdi_cli::eval::array_run::{array_config, run_array, ArrayRun};
 
 const DEG: f64 = PI / 180.0;
 
@@ -35,7 +35,9 @@ fn s4_bias_on_sensor_6_is_detected_and_isolated_in_20_of_20_seeds() {
         for o in [&r.pca, &r.glt, &r.cusum, &r.px4, &r.ardupilot] {
             assert_eq!(o.false_alarm_events, 0, "seed {seed}: {r:?}");
         }
-        let quick = |o: &hal_sim::array_run::MethodOutcome| o.first_alarm.is_some_and(|t| t < 6.2);
+        let quick = |o: &imu_fdi_cli::eval::array_run::MethodOutcome| {
+            o.first_alarm.is_some_and(|t| t < 6.2)
+        };
         pca += usize::from(quick(&r.pca));
         glt += usize::from(quick(&r.glt));
         cusum += usize::from(quick(&r.cusum));

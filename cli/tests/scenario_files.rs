@@ -4,8 +4,8 @@
 
 use std::path::PathBuf;
 
-use hal_sim::scenario_file::{parse_scenario, read_scenario, scenario_toml};
 use hal_sim::Scenario;
+use imu_fdi_cli::io::scenario_file::{parse_scenario, read_scenario, scenario_toml};
 
 fn path(name: &str) -> PathBuf {
     PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios")).join(format!("{name}.toml"))

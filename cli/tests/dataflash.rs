@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use hal_sim::parity_replay::{read_any_imu_log, read_dataflash, read_imu_log};
+use imu_fdi_cli::eval::parity_replay::{read_any_imu_log, read_dataflash, read_imu_log};
 
 fn data(name: &str) -> std::path::PathBuf {
     Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data")).join(name)

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use hal_sim::log_import::{quaternion_to_euler, ulog_to_replay_csv};
+use imu_fdi_cli::io::log_import::{quaternion_to_euler, ulog_to_replay_csv};
 
 #[test]
 fn a_real_px4_flight_converts_with_consistent_axes() {

@@ -20,7 +20,7 @@ use imu_fdi::detect::TTest;
 use imu_fdi::math::{cholesky, sin_cos_f32, sqrt_f32};
 use imu_fdi::model::{ImuVec, MeasVec};
 
-use hal_sim::qemu::instructions;
+use imu_fdi_qemu::instructions;
 
 const EXPECTATIONS: &str = include_str!("../../../tests/data/target_expectations.txt");
 

@@ -6,7 +6,7 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 
 use hal_sim::array::{triad_directions, ArrayKind, ArraySpec, Layout};
-use hal_sim::array_sweep::sweep;
+use imu_fdi_cli::eval::array_sweep::sweep;
 
 fn board(kind: ArrayKind) -> ArraySpec<9> {
     ArraySpec::fault_free(

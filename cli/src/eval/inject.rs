@@ -23,7 +23,7 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
-use crate::fault::{FaultKind, FaultRow, FaultSizes};
+use hal_sim::fault::{FaultKind, FaultRow, FaultSizes};
 
 /// A fault table to inject into a log.
 #[derive(Debug, Clone, PartialEq, serde::Deserialize)]
