@@ -95,29 +95,38 @@ impl<T: Real> OtsukfConfig<T> {
         }
     }
 
-    /// Checks the configuration.
+    /// Checks every field, the base configuration's included; the error
+    /// names the first offending field.
     pub fn validate(&self) -> Result<(), ConfigError> {
         self.base.validate()?;
-        let ok = self
-            .fault_psd
-            .iter()
-            .chain(self.fault_sigma0.iter())
-            .all(|v| v.finite() && *v > T::zero())
-            && self.k_on.finite()
-            && self.k_off.finite()
-            && self.k_off > T::zero()
-            && self.k_off <= self.k_on
-            && self.adapt_k.finite()
-            && self.adapt_k > T::zero()
-            && self.adapt_gain.iter().all(|g| g.finite() && *g >= T::one())
-            && self.adapt_hold_s.finite()
-            && self.adapt_hold_s >= T::zero()
-            && self.adapt_level.is_none_or(|l| l.finite() && l > T::zero());
-        if ok {
-            Ok(())
-        } else {
-            Err(ConfigError::NonPositive)
+        let pos = |v: T| v.finite() && v > T::zero();
+        let positive: [(&'static str, bool); 6] = [
+            ("fault_psd", self.fault_psd.iter().all(|v| pos(*v))),
+            ("fault_sigma0", self.fault_sigma0.iter().all(|v| pos(*v))),
+            ("k_on", pos(self.k_on)),
+            ("k_off", pos(self.k_off)),
+            ("adapt_k", pos(self.adapt_k)),
+            ("adapt_level", self.adapt_level.is_none_or(pos)),
+        ];
+        if let Some(&(field, _)) = positive.iter().find(|(_, ok)| !ok) {
+            return Err(ConfigError::NonPositive(field));
         }
+        let in_range: [(&'static str, bool); 3] = [
+            // Hysteresis: the clear threshold may not exceed the set one.
+            ("k_off", self.k_off <= self.k_on),
+            (
+                "adapt_gain",
+                self.adapt_gain.iter().all(|g| g.finite() && *g >= T::one()),
+            ),
+            (
+                "adapt_hold_s",
+                self.adapt_hold_s.finite() && self.adapt_hold_s >= T::zero(),
+            ),
+        ];
+        if let Some(&(field, _)) = in_range.iter().find(|(_, ok)| !ok) {
+            return Err(ConfigError::OutOfRange(field));
+        }
+        Ok(())
     }
 }
 

@@ -22,6 +22,7 @@ mod health;
 mod monitor;
 mod space;
 mod training;
+mod validate;
 
 pub use geometry::{euler_rotation, yaw_rotation, Geometry};
 pub use health::{HealthConfig, Reading, SensorHealth, SensorStatus};
@@ -31,7 +32,8 @@ pub use monitor::{
 pub use space::ParitySpace;
 pub use training::{Baseline, Trainer};
 
-/// A redundant-array configuration that cannot work.
+/// A redundant-array configuration that cannot work. Its `Display` names
+/// the field.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ConfigError {
@@ -47,4 +49,7 @@ pub enum ConfigError {
     Window,
     /// False-alarm probability outside (0, 0.5) or run length ≤ 1.
     Probability,
+    /// This field is zero, negative, not finite or out of range (see
+    /// [`ParityConfig::validate`]).
+    Field(&'static str),
 }
