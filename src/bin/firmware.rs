@@ -99,7 +99,7 @@ fn main() -> ! {
         let now = cortex_m::peripheral::DWT::cycle_count();
         let dt = now.wrapping_sub(last) as f32 / sysclk;
         last = now;
-        let aiding = if n % AIDING_EVERY == 0 {
+        let aiding = if n.is_multiple_of(AIDING_EVERY) {
             bench_aiding(last_accel)
         } else {
             Measurement::none()
@@ -110,7 +110,7 @@ fn main() -> ! {
         if !r.read_failed {
             last_accel = [r.corrected[0], r.corrected[1], r.corrected[2]];
         }
-        if n % RATE_HZ == 0 {
+        if n.is_multiple_of(RATE_HZ) {
             defmt::info!(
                 "t={}s {} status={} fault={} health={} reads failed={} step={} cycles",
                 n / RATE_HZ,

@@ -98,8 +98,11 @@ pub struct MonitorTask<I, M = UkfMonitor<f32>> {
 #[deprecated(note = "renamed `MonitorTask`: it is the periodic task that drives a monitor")]
 pub type Monitor<I, M = UkfMonitor<f32>> = MonitorTask<I, M>;
 
-impl<I: Imu, const W: usize> MonitorTask<I, UkfMonitor<f32, W>> {
-    /// A task reading `imu` and running a UKF monitor configured by `cfg`.
+impl<I: Imu> MonitorTask<I> {
+    /// A task reading `imu` and running a UKF monitor configured by `cfg`
+    /// (default window). One impl only, so `MonitorTask::new(imu, cfg)`
+    /// needs no type annotation; another window or monitor goes through
+    /// [`with_monitor`](Self::with_monitor).
     pub fn new(imu: I, cfg: UkfMonitorConfig<f32>) -> Result<Self, ConfigError> {
         Ok(Self::with_monitor(imu, UkfMonitor::new(cfg)?))
     }
