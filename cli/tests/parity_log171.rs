@@ -1,20 +1,32 @@
 //! Real data, GIVEN ArduPilot log171 (three synchronous IMUs at 49 Hz, a
 //! Pixhawk in Loiter then Acro, crash at ≈ 239 s; CC BY-SA 3.0, see
-//! tests/data/LICENSE-ap_log171.md), WHEN the parity monitor trains in
-//! flight (80–110 s: 20 s training, 10 s calibration) and runs to the end,
-//! THEN normal flight raises no alarm, the crash is flagged in the window
-//! the external DroneKit-LA analyser reports (239.825–241.335 s), and
-//! injected biases are found at these sizes.
+//! tests/data/LICENSE-ap_log171.md), WHEN the parity monitor for real
+//! flights (`ParityConfig::gyro_flight`/`accel_flight`: in-flight relative
+//! calibration, multi-scale tests with covariances learned from the data)
+//! trains for 30 s from any start between 60 and 100 s and runs to the end,
+//! THEN the gyros raise no alarm in normal flight, the crash is flagged in
+//! the window the external DroneKit-LA analyser reports, and injected steps
+//! are isolated at the rates measured below (the issue-14 table: every IMU ×
+//! axis × sign, six onsets after monitoring start, five training starts,
+//! 15-s steps, isolated to the right sensor within 10 s and nothing else
+//! alarming before the crash). The figures are asserted as measured, so a
+//! change that loses detections or adds false alarms fails here.
 
 use std::path::Path;
 
 use hal_sim::array::ArrayKind;
-use imu_fdi_cli::eval::parity_replay::{read_imu_log, replay_parity, ImuLog, Injection};
+use imu_fdi_cli::eval::parity_replay::{
+    power_up_table, read_imu_log, replay_parity, replay_parity_with, step_table, ImuLog,
+    ParityMethod, StepCase,
+};
 
 /// DroneKit-LA: "IMU vs IMU2 gyro differ, max 11.7 deg/s", this interval.
 const ANALYSER: (f64, f64) = (239.825, 241.335);
 /// The crash begins (SOURCES.md: ≈ 239 s; the first saturated sample is at 239.16 s).
 const CRASH: f64 = 239.0;
+const TRAIN_STARTS: [f64; 5] = [60.0, 70.0, 80.0, 90.0, 100.0];
+/// Onsets, seconds after monitoring start.
+const ONSETS: [f64; 6] = [5.0, 25.0, 45.0, 65.0, 85.0, 105.0];
 
 fn log() -> ImuLog {
     read_imu_log(Path::new(concat!(
@@ -25,87 +37,160 @@ fn log() -> ImuLog {
 }
 
 #[test]
-fn normal_flight_is_quiet_and_the_crash_is_flagged_in_the_analysers_window() {
+fn gyros_are_quiet_in_normal_flight_from_any_training_start_and_flag_the_crash() {
     let log = log();
-    for kind in [ArrayKind::Gyro, ArrayKind::Accel] {
-        let r = replay_parity(&log, kind, 80.0, 30.0, None).unwrap();
+    for ts in [60.0, 65.0, 70.0, 75.0, 80.0, 85.0, 90.0, 95.0, 100.0] {
+        let r = replay_parity(&log, ArrayKind::Gyro, ts, 30.0, None).unwrap();
         let from = r.monitoring_from.unwrap();
-        assert!((109.0..111.0).contains(&from), "{kind:?}: {from}");
-        // 129 s of Loiter and Acro without a single alarm or isolation.
+        assert!((ts + 29.0..ts + 33.0).contains(&from), "{ts}: {from}");
         assert!(
             r.alarms.iter().all(|a| a.0 >= CRASH),
-            "{kind:?}: {:?}",
+            "{ts}: {:?}",
             r.alarms
         );
         assert!(
             r.isolations.iter().all(|a| a.1 >= CRASH),
-            "{kind:?}: {:?}",
+            "{ts}: {:?}",
             r.isolations
         );
-        // The crash: first alarm after it began and no later than the end of
-        // the analyser's interval.
-        let first = r.alarms.first().map(|a| a.0).unwrap();
-        assert!((CRASH..=ANALYSER.1).contains(&first), "{kind:?}: {first}");
-        // The baselines stay silent through normal flight too.
-        assert!(r.px4.iter().chain(r.ardupilot.iter()).all(|a| a.0 >= CRASH));
     }
     let gyro = replay_parity(&log, ArrayKind::Gyro, 80.0, 30.0, None).unwrap();
-    // A gyro alarm inside the analyser's own interval (measured: 240.49–240.67 s)...
+    // The crash: an alarm inside the analyser's interval (measured 240.0–240.5 s)…
     assert!(
         gyro.alarms
             .iter()
-            .any(|a| a.0 <= ANALYSER.1 && a.1 >= ANALYSER.0),
+            .any(|a| a.0 >= CRASH && a.0 <= ANALYSER.1 && a.1 >= ANALYSER.0),
         "{:?}",
         gyro.alarms
     );
-    // ...saturated gyros (beyond ±2,000 °/s) are marked, not used.
+    // …and saturated gyros (beyond ±2,000 °/s) are marked, not used.
     assert!(gyro.statuses.iter().any(|(_, s, t)| {
         matches!(
             s,
             imu_fdi::parity::SensorStatus::OutOfRange | imu_fdi::parity::SensorStatus::Clipping
         ) && (CRASH..ANALYSER.1).contains(t)
     }));
-    // Neither autopilot baseline flags the gyros at all (ArduPilot-like needs
-    // 10 s of disagreement; PX4-like accumulates past 7 °/s).
-    assert!(gyro.px4.is_empty() && gyro.ardupilot.is_empty());
-}
-
-/// Smallest bias (from the grid) flagged within 15 s and isolated to the right sensor.
-fn smallest(
-    log: &ImuLog,
-    kind: ArrayKind,
-    imu: usize,
-    channel: usize,
-    sizes: &[f64],
-) -> Option<(f64, f64)> {
-    sizes.iter().find_map(|&size| {
-        let inj = Injection {
-            imu,
-            channel,
-            size,
-            start: 130.0,
-        };
-        let r = replay_parity(log, kind, 80.0, 30.0, Some(inj)).unwrap();
-        let alarm = r.alarms.iter().find(|a| a.0 >= 130.0 && a.0 < 145.0)?;
-        let sensor = 3 * imu + channel % 3;
-        r.isolations
-            .iter()
-            .any(|(k, t)| *k == sensor && *t < 145.0)
-            .then_some((size, alarm.0 - 130.0))
-    })
 }
 
 #[test]
-fn injected_biases_in_flight_are_found_at_these_sizes() {
+fn accelerometer_false_alarms_in_normal_flight_stay_as_measured() {
+    // On this 2015 board the a_z of the three IMUs part by up to 2 m/s² for
+    // seconds under vibration; the rectification regressors remove most of
+    // it but not all. Measured over nine training starts (60, 65, …, 100 s):
+    // 10 alarm events before the crash, 2 healthy sensors isolated.
     let log = log();
-    let deg = [1.0, 2.0, 3.0, 5.0, 7.0, 10.0].map(|d: f64| d.to_radians());
-    // IMU 1 yaw gyro: 5 °/s, in about a second (PX4-like needs 15 °/s,
-    // ArduPilot-like 10 °/s and 10 s: `cargo sim parity-replay … --inject-at 130,180`).
-    let (size, delay) = smallest(&log, ArrayKind::Gyro, 1, 5, &deg).unwrap();
-    assert_eq!(size, 5.0_f64.to_radians());
-    assert!(delay < 1.5, "{delay}");
-    // IMU 2 lateral accelerometer: 0.5 m/s² (PX4-like 1.5, ArduPilot-like 1.0).
-    let (size, delay) = smallest(&log, ArrayKind::Accel, 2, 1, &[0.2, 0.3, 0.5, 0.7, 1.0]).unwrap();
-    assert_eq!(size, 0.5);
-    assert!(delay < 1.5, "{delay}");
+    let (mut events, mut isolations) = (0, 0);
+    for ts in [60.0, 65.0, 70.0, 75.0, 80.0, 85.0, 90.0, 95.0, 100.0] {
+        let r = replay_parity(&log, ArrayKind::Accel, ts, 30.0, None).unwrap();
+        events += r.alarms.iter().filter(|a| a.0 < CRASH).count();
+        isolations += r.isolations.iter().filter(|a| a.1 < CRASH).count();
+    }
+    assert!(events <= 10, "{events}");
+    assert!(isolations <= 2, "{isolations}");
+}
+
+#[test]
+fn the_simulators_glt_cusum_method_still_replays() {
+    // The white-noise method (SPEC §7 defaults) trained at 80 s, as before
+    // the real-flight tests existed: quiet in normal flight.
+    let log = log();
+    for kind in [ArrayKind::Gyro, ArrayKind::Accel] {
+        let r = replay_parity_with(&log, kind, 80.0, 30.0, None, ParityMethod::GltCusum).unwrap();
+        assert!(r.alarms.iter().all(|a| a.0 >= CRASH), "{kind:?}");
+    }
+}
+
+fn passes(cases: &[StepCase], pred: impl Fn(&StepCase) -> bool) -> (usize, usize) {
+    let sel: Vec<_> = cases
+        .iter()
+        .filter(|c| c.injection.start + 10.0 < CRASH && pred(c))
+        .collect();
+    let ok = sel.iter().filter(|c| c.isolated && !c.false_alarm).count();
+    (ok, sel.len())
+}
+
+#[test]
+fn injected_gyro_steps_are_isolated_at_the_measured_rates() {
+    let log = log();
+    let cases = step_table(
+        &log,
+        ArrayKind::Gyro,
+        1.0_f64.to_radians(),
+        &TRAIN_STARTS,
+        30.0,
+        &ONSETS,
+        15.0,
+        CRASH,
+    )
+    .unwrap();
+    let axis = |a: usize| move |c: &StepCase| c.injection.channel == 3 + a;
+    // 1 °/s, measured: z 160/174, y 87/174, x 1/174 (IMU0's x gyro reads
+    // 12 °/s of aliased vibration per sample: with it, a step on IMU1 or
+    // IMU2 x cannot be told from the opposite step on the other one within
+    // 10 s at the isolation margin); 5 cases with a false alarm.
+    let (z, n) = passes(&cases, axis(2));
+    assert!(z >= 158 && n == 174, "{z}/{n}");
+    let (y, _) = passes(&cases, axis(1));
+    assert!(y >= 85, "{y}");
+    let fa = cases.iter().filter(|c| c.false_alarm).count();
+    assert!(fa <= 5, "{fa}");
+    // Every IMU is covered: z steps on each IMU isolated in ≥ 50 of 58 cases.
+    for imu in 0..3 {
+        let (ok, _) = passes(&cases, |c| {
+            c.injection.imu == imu && c.injection.channel == 5
+        });
+        assert!(ok >= 50, "imu {imu}: {ok}");
+    }
+    // Delays: every isolation within the 10 s, median a few seconds.
+    let mut d: Vec<f64> = cases.iter().filter_map(|c| c.delay).collect();
+    d.sort_by(f64::total_cmp);
+    assert!(d.last().is_some_and(|x| *x < 10.0));
+}
+
+#[test]
+fn injected_accelerometer_steps_are_isolated_at_the_measured_rates() {
+    let log = log();
+    let cases = step_table(
+        &log,
+        ArrayKind::Accel,
+        0.3,
+        &TRAIN_STARTS,
+        30.0,
+        &ONSETS,
+        15.0,
+        CRASH,
+    )
+    .unwrap();
+    // 0.3 m/s², measured: x 153/174, y 147/174, z 55/174 (the a_z
+    // vibration events above), 50 cases with a false alarm.
+    let axis = |a: usize| move |c: &StepCase| c.injection.channel == a;
+    let (x, _) = passes(&cases, axis(0));
+    let (y, _) = passes(&cases, axis(1));
+    let (z, _) = passes(&cases, axis(2));
+    assert!(x >= 150 && y >= 144 && z >= 52, "{x} {y} {z}");
+    for imu in 0..3 {
+        let (ok, _) = passes(&cases, |c| {
+            c.injection.imu == imu && c.injection.channel < 2
+        });
+        assert!(ok >= 90, "imu {imu}: {ok}");
+    }
+}
+
+#[test]
+fn a_gyro_bias_present_from_power_up_is_reported_without_naming_a_healthy_sensor() {
+    let log = log();
+    let cases = power_up_table(
+        &log,
+        ArrayKind::Gyro,
+        2.0_f64.to_radians(),
+        &TRAIN_STARTS,
+        30.0,
+        CRASH,
+    )
+    .unwrap();
+    // Measured: 63 of 90 isolated within 10 s of monitoring start (the
+    // offset check: relative bias above 1.2 °/s), never a healthy sensor.
+    let ok = cases.iter().filter(|c| c.delay.is_some()).count();
+    assert!(ok >= 60, "{ok}");
+    assert!(cases.iter().all(|c| !c.wrong_isolation));
 }

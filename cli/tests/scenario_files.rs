@@ -1,6 +1,6 @@
 //! The built-in scenarios ship as TOML files in `scenarios/`; this test
 //! keeps each file identical to its built-in (regenerate with
-//! `UPDATE_SCENARIO_FILES=1 cargo test -p hal-sim --test scenario_files`).
+//! `UPDATE_SCENARIO_FILES=1 cargo test -p imu-fdi-cli --test scenario_files`).
 
 use std::path::PathBuf;
 

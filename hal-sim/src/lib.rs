@@ -4,12 +4,14 @@
 //! with exact IMU truth ([`trajectory`]), a datasheet-class IMU error model
 //! ([`imu_model`]), aiding sensors at their own rates, an emulated
 //! ICM-42688-P ([`emulated_icm42688`]), redundant arrays ([`array`](mod@array)), fault
-//! injection ([`fault`]) and scenarios as data ([`scenario`]), all `no_std`
-//! so the same models run inside firmware (the `imu-fdi-qemu` images). With
-//! the default `std` feature it adds the scenario runner and SPEC §9 metrics
-//! (`runner`, `metrics`), which the core crate's scenario tests use; the host
-//! tools (the `imu-fdi-sim` CLI, log import and replay, campaigns, plots) are
-//! the `imu-fdi-cli` crate.
+//! injection ([`fault`]), scenarios as data ([`scenario`]) and a three-IMU
+//! flight that looks like a real one (vibration, each IMU's signal chain,
+//! the logger's decimation; fitted to ArduPilot log171: [`realistic`]), all
+//! `no_std` so the same models run inside firmware (the `imu-fdi-qemu`
+//! images). With the default `std` feature it adds the scenario runner and
+//! SPEC §9 metrics (`runner`, `metrics`), which the core crate's scenario
+//! tests use; the host tools (the `imu-fdi-sim` CLI, log import and replay,
+//! parity replay, campaigns, plots) are the `imu-fdi-cli` crate.
 #![cfg_attr(not(feature = "std"), no_std)]
 
 pub mod array;
@@ -18,6 +20,7 @@ pub mod emulated_icm42688;
 pub mod fault;
 pub mod imu_model;
 pub mod ots;
+pub mod realistic;
 pub mod scenario;
 pub mod setup;
 pub mod sim;

@@ -20,6 +20,7 @@
 mod geometry;
 mod health;
 mod monitor;
+mod multiscale;
 mod space;
 mod training;
 mod validate;
@@ -29,6 +30,7 @@ pub use health::{HealthConfig, Reading, SensorHealth, SensorStatus};
 pub use monitor::{
     DetectorFlags, ParityConfig, ParityDetector, ParityMonitor, ParityPhase, ParityReport,
 };
+pub use multiscale::{MultiscaleConfig, MultiscaleDecision, REGRESSORS, SCALES};
 pub use space::ParitySpace;
 pub use training::{Baseline, Trainer};
 
@@ -49,6 +51,8 @@ pub enum ConfigError {
     Window,
     /// False-alarm probability outside (0, 0.5) or run length ≤ 1.
     Probability,
+    /// A field of [`MultiscaleConfig`] out of range (see its `check`).
+    Multiscale,
     /// This field is zero, negative, not finite or out of range (see
     /// [`ParityConfig::validate`]).
     Field(&'static str),

@@ -8,6 +8,7 @@ use crate::math::{cholesky, cholesky_solve_right, symmetric_eigen, Real};
 use crate::stats::{chi_square_upper_quantile, cusum_threshold};
 
 use super::health::{HealthConfig, Reading, SensorHealth, SensorStatus};
+use super::multiscale::{Multiscale, MultiscaleConfig, MultiscaleDecision, REGRESSORS};
 use super::space::invert_rank3;
 use super::training::{Baseline, Trainer};
 use super::{ConfigError, Geometry, ParitySpace};
@@ -25,6 +26,10 @@ pub enum ParityDetector {
     Cusum,
     /// Alarm when either the GLT or the CUSUM alarms.
     GltOrCusum,
+    /// Real flights: in-flight relative calibration, Huber-clipped blocks
+    /// and GLR tests on window means at several lengths with covariances
+    /// learned from the data ([`MultiscaleConfig`]).
+    Multiscale,
 }
 
 /// Configuration of a [`ParityMonitor`].
@@ -64,6 +69,8 @@ pub struct ParityConfig<T> {
     pub isolate_after: u16,
     /// The test whose alarm isolates.
     pub detector: ParityDetector,
+    /// Settings of [`ParityDetector::Multiscale`].
+    pub multiscale: MultiscaleConfig<T>,
 }
 
 impl<T: Real> ParityConfig<T> {
@@ -104,6 +111,7 @@ impl<T: Real> ParityConfig<T> {
             drift_blocks: T::lit(50.0),
             isolate_after: 3,
             detector: ParityDetector::GltOrCusum,
+            multiscale: MultiscaleConfig::new(T::lit(deg), T::lit(1.2 * deg)),
         }
     }
 
@@ -113,7 +121,45 @@ impl<T: Real> ParityConfig<T> {
         Self {
             cusum_bias: T::lit(0.01),
             ridge: T::lit(0.05 * 0.05),
+            multiscale: MultiscaleConfig::new(T::lit(0.1), T::lit(0.75)),
             ..Self::gyro(rate_hz, fs)
+        }
+    }
+
+    /// Gyro array of a real flight controller (several IMUs on one vibrating
+    /// board, logged or sampled at `rate_hz`): the
+    /// [`Multiscale`](ParityDetector::Multiscale) detector on ≈ 0.25 s
+    /// blocks, 30 s of training (no separate threshold calibration: the
+    /// covariances keep learning in flight), isolation after 3 decisions.
+    /// Needs a monitor window `W` ≥ 40 blocks. The offset limit, 1.2 °/s,
+    /// is the largest relative gyro bias accepted once trained: twice the
+    /// largest relative offset of log171's three healthy IMUs (0.6 °/s);
+    /// larger ones are reported as a fault present since power-up.
+    pub fn gyro_flight(rate_hz: f64, fs: T) -> Self {
+        let block = libm::round(rate_hz / 4.0).max(1.0);
+        Self {
+            block_len: block as u16,
+            train_samples: libm::round(30.0 * rate_hz) as u32,
+            calibrate_samples: 0,
+            drift_blocks: T::zero(),
+            detector: ParityDetector::Multiscale,
+            ..Self::gyro(rate_hz, fs)
+        }
+    }
+
+    /// Accelerometer array of a real flight controller: as
+    /// [`gyro_flight`](Self::gyro_flight) with accelerometer units, each
+    /// sensor's vibration as a regressor (rectification) and an offset limit
+    /// of 0.75 m/s², ArduPilot's accelerometer consistency threshold.
+    pub fn accel_flight(rate_hz: f64, fs: T) -> Self {
+        Self {
+            cusum_bias: T::lit(0.01),
+            ridge: T::lit(0.05 * 0.05),
+            multiscale: MultiscaleConfig {
+                vibration: true,
+                ..MultiscaleConfig::new(T::lit(0.1), T::lit(1.0))
+            },
+            ..Self::gyro_flight(rate_hz, fs)
         }
     }
 }
@@ -186,6 +232,34 @@ pub struct ParityReport<T: Real, const N: usize> {
     pub common_mode_saturation: bool,
     /// Parity dimension in use.
     pub parity_dim: usize,
+    /// Latest decision of the multi-scale tests (ratio to threshold,
+    /// suspect, bias, isolation margin).
+    pub multiscale: MultiscaleDecision<T>,
+}
+
+/// Sums over the block being accumulated for the multi-scale tests.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct BlockSums<T: Real, const N: usize> {
+    p: SVector<T, N>,
+    x: Vector3<T>,
+    /// First sample of the block, the sensors' sums are centred on.
+    m0: Option<SVector<T, N>>,
+    m: SVector<T, N>,
+    mm: SVector<T, N>,
+    n: u16,
+}
+
+impl<T: Real, const N: usize> Default for BlockSums<T, N> {
+    fn default() -> Self {
+        Self {
+            p: SVector::zeros(),
+            x: Vector3::zeros(),
+            m0: None,
+            m: SVector::zeros(),
+            mm: SVector::zeros(),
+            n: 0,
+        }
+    }
 }
 
 /// Derived per-space quantities (recomputed on reconfiguration).
@@ -235,6 +309,18 @@ pub struct ParityMonitor<T: Real, const N: usize, const W: usize> {
     /// software-`f64` root finding.
     chi2: [T; N],
     last: ParityReport<T, N>,
+    /// Multi-scale tests (with [`ParityDetector::Multiscale`]).
+    ms: Option<Multiscale<T, N, W>>,
+    /// Block being accumulated for them.
+    ms_block: BlockSums<T, N>,
+    /// The previous block (`p̄`, `x̄`, per-sensor variance) and the fused
+    /// mean before it: a block is processed when the next one is complete,
+    /// so its skew regressor is the centred difference.
+    ms_prev: Option<(SVector<T, N>, Vector3<T>, SVector<T, N>)>,
+    ms_prev2: Option<Vector3<T>>,
+    /// Blocks seen since (re)training began.
+    ms_blocks: u32,
+    ms_trained: bool,
 }
 
 impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
@@ -243,8 +329,11 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// false-alarm probability.
     pub fn new(geometry: &Geometry<T, N>, cfg: ParityConfig<T>) -> Result<Self, ConfigError> {
         cfg.validate()?;
-        if cfg.window_blocks == 0 || cfg.window_blocks > W {
+        if cfg.window_blocks == 0 || cfg.window_blocks > W || cfg.block_len == 0 {
             return Err(ConfigError::Window);
+        }
+        if cfg.detector == ParityDetector::Multiscale && cfg.multiscale.check(W).is_err() {
+            return Err(ConfigError::Multiscale);
         }
         if !(cfg.false_alarm > 0.0 && cfg.false_alarm < 0.5)
             || cfg.cusum_arl0.is_nan()
@@ -277,6 +366,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             isolated: None,
             common_mode_saturation: false,
             parity_dim: space.dim(),
+            multiscale: MultiscaleDecision::default(),
         };
         Ok(Self {
             trainer: Trainer::new(cfg.train_samples, cfg.block_len, cfg.ridge),
@@ -299,7 +389,25 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             calibrated: 0,
             chi2,
             last: report,
-        })
+            ms: None,
+            ms_block: BlockSums::default(),
+            ms_prev: None,
+            ms_prev2: None,
+            ms_blocks: 0,
+            ms_trained: false,
+        }
+        .with_multiscale())
+    }
+
+    /// Creates the multi-scale tests when they are the detector.
+    fn with_multiscale(mut self) -> Self {
+        if self.cfg.detector == ParityDetector::Multiscale {
+            let h = chi_square_upper_quantile(self.cfg.multiscale.false_alarm, 1)
+                .map(T::lit)
+                .unwrap_or(T::lit(23.9));
+            self.ms = Some(Multiscale::new(self.cfg.multiscale, self.space.dim(), h));
+        }
+        self
     }
 
     /// Back to training with every sensor healthy (an explicit reset after
@@ -395,8 +503,15 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                 ParityPhase::Training => self.train(&p, &x),
                 _ => self.monitor(&p, &x, &mut report),
             }
+            if self.ms.is_some() {
+                self.multiscale_sample(&m, &p, &x, &mut report);
+            }
         }
         report.phase = self.phase;
+        if self.ms.is_some() && !self.ms_trained && self.phase == ParityPhase::Monitoring {
+            // The multi-scale tests are still learning: cannot judge yet.
+            report.phase = ParityPhase::Training;
+        }
         report.status = status;
         report.parity_dim = self.space.dim();
         if let Some(t) = &self.tests {
@@ -522,6 +637,8 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             ParityDetector::Glt => report.flags.glt,
             ParityDetector::Cusum => report.flags.cusum,
             ParityDetector::GltOrCusum => report.flags.glt || report.flags.cusum,
+            // Decided per block in `multiscale_block`.
+            ParityDetector::Multiscale => return,
         };
         report.fault = fault;
 
@@ -569,6 +686,138 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             report.isolated = Some(k);
             report.fault = false;
             report.flags = DetectorFlags::default();
+        }
+    }
+
+    /// Accumulates one sample into the multi-scale block; a complete block
+    /// processes the one before it (whose centred difference is now known).
+    fn multiscale_sample(
+        &mut self,
+        m: &SVector<T, N>,
+        p: &SVector<T, N>,
+        x: &Vector3<T>,
+        report: &mut ParityReport<T, N>,
+    ) {
+        let b = &mut self.ms_block;
+        // Centre the sensor sums on the block's first sample so the f32
+        // variance is not the difference of two large numbers.
+        let m0 = *b.m0.get_or_insert(*m);
+        let dm = m - m0;
+        b.p += p;
+        b.x += x;
+        b.m += dm;
+        b.mm += dm.component_mul(&dm);
+        b.n = b.n.saturating_add(1);
+        if b.n < self.cfg.block_len {
+            return;
+        }
+        let n = T::lit(f64::from(b.n));
+        let (pb, xb) = (b.p / n, b.x / n);
+        let mean = b.m / n;
+        let eb = (b.mm / n - mean.component_mul(&mean)).map(|v| v.max(T::zero()));
+        self.ms_block = BlockSums::default();
+        if let (Some((p_prev, x_prev, e_prev)), Some(x_before)) = (self.ms_prev, self.ms_prev2) {
+            let dx = (xb - x_before) * T::lit(0.5);
+            self.multiscale_block(&p_prev, &x_prev, &dx, &e_prev, report);
+        }
+        self.ms_prev2 = self.ms_prev.map(|(_, x, _)| x);
+        self.ms_prev = Some((pb, xb, eb));
+    }
+
+    /// One block through the multi-scale tests: training (first two thirds
+    /// calibrate, the last third measures the residual's covariance), then
+    /// a decision per block, with isolation after `isolate_after` agreeing
+    /// decisions whose hypothesis beats the runner-up by the margin.
+    fn multiscale_block(
+        &mut self,
+        p: &SVector<T, N>,
+        x: &Vector3<T>,
+        dx: &Vector3<T>,
+        e: &SVector<T, N>,
+        report: &mut ParityReport<T, N>,
+    ) {
+        let train_blocks = (self.cfg.train_samples / u32::from(self.cfg.block_len.max(1))).max(12);
+        let cfg = self.cfg.multiscale;
+        let v = *self.space.v();
+        let active = *self.space.active();
+        let Some(ms) = self.ms.as_mut() else {
+            return;
+        };
+        // Sensors out of the set may read anything: no vibration regressor.
+        let e = SVector::<T, N>::from_fn(|i, _| {
+            if active.get(i).copied().unwrap_or(false) {
+                e.get(i).copied().unwrap_or(T::zero())
+            } else {
+                T::zero()
+            }
+        });
+        let phi: SVector<T, REGRESSORS> = ms.regressor(x, dx, &e);
+        if !self.ms_trained {
+            self.ms_blocks = self.ms_blocks.saturating_add(1);
+            if self.ms_blocks <= train_blocks * 2 / 3 {
+                ms.learn_calibration(p, &phi, false);
+                return;
+            }
+            if let Some(r) = ms.residual(p, &phi) {
+                ms.train_residual(&r, &phi);
+            }
+            ms.learn_calibration(p, &phi, false);
+            if self.ms_blocks >= train_blocks {
+                if ms.finish_training(train_blocks).is_some() {
+                    self.ms_trained = true;
+                } else {
+                    // Degenerate training data: start again.
+                    *ms = Multiscale::new(cfg, self.space.dim(), ms.threshold());
+                    self.ms_blocks = 0;
+                }
+            }
+            return;
+        }
+        let Some(r) = ms.residual(p, &phi) else {
+            return;
+        };
+        let mut d = ms.decide(p, &phi, &r, &v, &active);
+        // A relative bias the calibration holds beyond the offset limit is
+        // a fault present since power-up (or since training).
+        if d.ratio <= T::one() {
+            if let Some((k, bias, margin)) = ms.offset_fault(&v, &active) {
+                d = MultiscaleDecision {
+                    ratio: T::one() + T::lit(1e-3),
+                    scale: 0,
+                    suspect: Some(k),
+                    bias,
+                    margin,
+                    isolate: Some((k, margin)),
+                    learning: false,
+                };
+            }
+        }
+        report.decision = true;
+        report.multiscale = d;
+        report.fault = d.ratio > T::one();
+        report.suspect = d.suspect;
+        report.bias_estimate = d.bias;
+        let candidate = d
+            .isolate
+            .filter(|(k, m)| report.fault && *m >= cfg.isolation_margin && self.space.isolable(*k))
+            .map(|(k, _)| k);
+        let Some(k) = candidate else {
+            if !report.fault {
+                self.suspect_run = (None, 0);
+            }
+            return;
+        };
+        self.suspect_run = match self.suspect_run {
+            (Some(j), n) if j == k => (Some(k), n.saturating_add(1)),
+            _ => (Some(k), 1),
+        };
+        if self.suspect_run.1 >= self.cfg.isolate_after {
+            if let Some(h) = self.health.get_mut(k) {
+                h.isolate();
+            }
+            self.exclude(k);
+            report.isolated = Some(k);
+            report.fault = false;
         }
     }
 
@@ -648,9 +897,21 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         self.cusum_pos = [T::zero(); N];
         self.cusum_neg = [T::zero(); N];
         self.suspect_run = (None, 0);
+        self.ms_block = BlockSums::default();
+        self.ms_prev = None;
+        self.ms_prev2 = None;
         match self.space.without(k) {
             Ok(sub) => {
                 let c = self.space.transition_to(&sub);
+                if let Some(ms) = self.ms.as_mut() {
+                    if self.ms_trained {
+                        ms.transform(&c, sub.dim());
+                    } else {
+                        // Failed while training: train the reduced set.
+                        *ms = Multiscale::new(self.cfg.multiscale, sub.dim(), ms.threshold());
+                        self.ms_blocks = 0;
+                    }
+                }
                 if let Some(t) = self.tests {
                     let b = Baseline {
                         offset: c * t.baseline.offset,
@@ -680,6 +941,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                 };
                 // No parity space is left; fusion uses the health masks.
                 self.tests = None;
+                self.ms = None;
             }
         }
     }

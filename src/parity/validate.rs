@@ -70,6 +70,9 @@ impl fmt::Display for ConfigError {
             Self::Probability => f.write_str(
                 "false_alarm / cusum_arl0: probability outside (0, 0.5) or run length ≤ 1",
             ),
+            Self::Multiscale => {
+                f.write_str("multiscale: a field out of range (see MultiscaleConfig::check)")
+            }
             Self::Field(field) => write!(f, "{field}: zero, negative, NaN or out of range"),
         }
     }

@@ -105,6 +105,8 @@ pub struct Injection {
     pub size: f64,
     /// Onset, s (log time).
     pub start: f64,
+    /// End (exclusive), s; `f64::INFINITY` for a bias that stays.
+    pub end: f64,
 }
 
 /// What one replay produced for one sensor kind.
@@ -159,6 +161,37 @@ pub fn replay_parity(
     train_s: f64,
     injection: Option<Injection>,
 ) -> Result<ParityReplay> {
+    replay_parity_with(
+        log,
+        kind,
+        train_start,
+        train_s,
+        injection,
+        ParityMethod::Flight,
+    )
+}
+
+/// Which parity tests a replay runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ParityMethod {
+    /// [`ParityConfig::gyro_flight`]/[`ParityConfig::accel_flight`]: in-flight
+    /// relative calibration and multi-scale tests with learned covariances.
+    #[default]
+    Flight,
+    /// The simulator's defaults ([`ParityConfig::gyro`]): windowed χ² or
+    /// CUSUM on 0.1 s blocks with calibrated thresholds (white-noise model).
+    GltCusum,
+}
+
+/// [`replay_parity`] with a chosen method.
+pub fn replay_parity_with(
+    log: &ImuLog,
+    kind: ArrayKind,
+    train_start: f64,
+    train_s: f64,
+    injection: Option<Injection>,
+    method: ParityMethod,
+) -> Result<ParityReplay> {
     if log.count != 3 {
         bail!(
             "the parity replay needs three IMUs, the log has {}",
@@ -171,17 +204,35 @@ pub fn replay_parity(
         ArrayKind::Gyro => (3, 2000.0_f64.to_radians()),
         ArrayKind::Accel => (0, 16.0 * imu_fdi::model::G0),
     };
-    let mut cfg = match kind {
-        ArrayKind::Gyro => ParityConfig::<f32>::gyro(rate, fs as f32),
-        ArrayKind::Accel => ParityConfig::<f32>::accel(rate, fs as f32),
+    let cfg = match (kind, method) {
+        (ArrayKind::Gyro, ParityMethod::Flight) => {
+            let mut c = ParityConfig::<f32>::gyro_flight(rate, fs as f32);
+            c.train_samples = (train_s * rate).round() as u32;
+            c
+        }
+        (ArrayKind::Accel, ParityMethod::Flight) => {
+            let mut c = ParityConfig::<f32>::accel_flight(rate, fs as f32);
+            c.train_samples = (train_s * rate).round() as u32;
+            c
+        }
+        (ArrayKind::Gyro, ParityMethod::GltCusum) => {
+            let mut c = ParityConfig::<f32>::gyro(rate, fs as f32);
+            // Two thirds train, one third calibrates the thresholds.
+            c.train_samples = (train_s * rate * 2.0 / 3.0).round() as u32;
+            c.calibrate_samples = (train_s * rate / 3.0).round() as u32;
+            c
+        }
+        (ArrayKind::Accel, ParityMethod::GltCusum) => {
+            let mut c = ParityConfig::<f32>::accel(rate, fs as f32);
+            c.train_samples = (train_s * rate * 2.0 / 3.0).round() as u32;
+            c.calibrate_samples = (train_s * rate / 3.0).round() as u32;
+            c
+        }
     };
-    // Two thirds train, one third calibrates the thresholds.
-    cfg.train_samples = (train_s * rate * 2.0 / 3.0).round() as u32;
-    cfg.calibrate_samples = (train_s * rate / 3.0).round() as u32;
     let geometry = Geometry::<f32, 9>::triads(&[Matrix3::identity(); 3])
         .map_err(|e| anyhow::anyhow!("{e:?}"))?;
     let mut monitor =
-        ParityMonitor::<f32, 9, 32>::new(&geometry, cfg).map_err(|e| anyhow::anyhow!("{e:?}"))?;
+        ParityMonitor::<f32, 9, 40>::new(&geometry, cfg).map_err(|e| anyhow::anyhow!("{e:?}"))?;
     let mut px4 = Px4Like::<3>::new(kind == ArrayKind::Gyro);
     let mut ap = ArduPilotLike::new(kind == ArrayKind::Gyro);
     let mut out = ParityReplay::default();
@@ -199,7 +250,7 @@ pub fn replay_parity(
                 .copied()
                 .unwrap_or(f64::NAN);
             if let Some(inj) = injection {
-                if inj.imu == imu && inj.channel == ch && *t >= inj.start {
+                if inj.imu == imu && inj.channel == ch && *t >= inj.start && *t < inj.end {
                     v += inj.size;
                 }
             }
@@ -314,6 +365,7 @@ pub fn injection_sweep(
                         channel: channel0 + axis,
                         size,
                         start: onset,
+                        end: f64::INFINITY,
                     };
                     let r = replay_parity(log, kind, train_start, train_s, Some(inj))?;
                     let first = |list: &[(f64, f64, Option<usize>)]| {
@@ -469,4 +521,160 @@ pub fn read_any_imu_log(path: &Path) -> Result<ImuLog> {
             path.display()
         ),
     }
+}
+
+/// One case of the step table: a bias on one IMU channel for a while.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepCase {
+    /// Training start, s.
+    pub train_start: f64,
+    /// The injected step.
+    pub injection: Injection,
+    /// Isolated to the right sensor within [`STEP_ISOLATE_WITHIN_S`] of onset.
+    pub isolated: bool,
+    /// Seconds from onset to that isolation.
+    pub delay: Option<f64>,
+    /// An alarm started outside the fault window (between monitoring start
+    /// and `end_s`), or a healthy sensor was isolated.
+    pub false_alarm: bool,
+}
+
+/// Seconds after onset within which the step must be isolated.
+pub const STEP_ISOLATE_WITHIN_S: f64 = 10.0;
+
+/// The log171 step table for one sensor kind and step size: for every
+/// training start, every IMU × axis × sign and every onset, a step lasting
+/// `duration_s` is replayed; a case passes when the right sensor is
+/// isolated within [`STEP_ISOLATE_WITHIN_S`] and nothing alarms outside
+/// `[onset, onset + duration_s]` before `end_s` (the crash). Onsets are
+/// seconds after the monitoring start of each training start.
+#[allow(clippy::too_many_arguments)]
+pub fn step_table(
+    log: &ImuLog,
+    kind: ArrayKind,
+    size: f64,
+    train_starts: &[f64],
+    train_s: f64,
+    onsets_after_start: &[f64],
+    duration_s: f64,
+    end_s: f64,
+) -> Result<Vec<StepCase>> {
+    let channel0 = match kind {
+        ArrayKind::Gyro => 3,
+        ArrayKind::Accel => 0,
+    };
+    let mut jobs = Vec::new();
+    for &ts in train_starts {
+        for &after in onsets_after_start {
+            for imu in 0..3 {
+                for axis in 0..3 {
+                    for sign in [1.0, -1.0] {
+                        jobs.push((ts, after, imu, axis, sign));
+                    }
+                }
+            }
+        }
+    }
+    use rayon::prelude::*;
+    jobs.par_iter()
+        .map(|&(ts, after, imu, axis, sign)| {
+            let start = ts + train_s + after;
+            let injection = Injection {
+                imu,
+                channel: channel0 + axis,
+                size: sign * size,
+                start,
+                end: start + duration_s,
+            };
+            let r = replay_parity(log, kind, ts, train_s, Some(injection))?;
+            let sensor = 3 * imu + axis;
+            let from = r.monitoring_from.unwrap_or(f64::INFINITY);
+            let first = r
+                .isolations
+                .iter()
+                .find(|(_, t)| *t >= start && *t < start + STEP_ISOLATE_WITHIN_S);
+            let isolated = first.is_some_and(|(k, _)| *k == sensor);
+            let wrong_isolation = r.isolations.iter().any(|(k, t)| *k != sensor && *t < end_s);
+            let outside = r
+                .alarms
+                .iter()
+                .any(|a| a.0 >= from && a.0 < end_s && (a.0 < start || a.0 > start + duration_s));
+            Ok(StepCase {
+                train_start: ts,
+                injection,
+                isolated,
+                delay: first.filter(|_| isolated).map(|(_, t)| t - start),
+                false_alarm: wrong_isolation || outside,
+            })
+        })
+        .collect()
+}
+
+/// A bias present on one IMU channel from the first row of the log.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PowerUpCase {
+    /// Training start, s.
+    pub train_start: f64,
+    /// The injected bias (start −∞, end +∞).
+    pub injection: Injection,
+    /// Seconds from monitoring start to the isolation of the right sensor,
+    /// when that came within [`STEP_ISOLATE_WITHIN_S`].
+    pub delay: Option<f64>,
+    /// A healthy sensor was isolated before the crash.
+    pub wrong_isolation: bool,
+}
+
+/// For every training start, IMU, axis and sign: a bias of `size` on that
+/// channel for the whole log. The case passes when the sensor is isolated
+/// within [`STEP_ISOLATE_WITHIN_S`] of monitoring start and no healthy
+/// sensor is isolated before `end_s`.
+pub fn power_up_table(
+    log: &ImuLog,
+    kind: ArrayKind,
+    size: f64,
+    train_starts: &[f64],
+    train_s: f64,
+    end_s: f64,
+) -> Result<Vec<PowerUpCase>> {
+    let channel0 = match kind {
+        ArrayKind::Gyro => 3,
+        ArrayKind::Accel => 0,
+    };
+    let mut jobs = Vec::new();
+    for &ts in train_starts {
+        for imu in 0..3 {
+            for axis in 0..3 {
+                for sign in [1.0, -1.0] {
+                    jobs.push((ts, imu, axis, sign));
+                }
+            }
+        }
+    }
+    use rayon::prelude::*;
+    jobs.par_iter()
+        .map(|&(ts, imu, axis, sign)| {
+            let injection = Injection {
+                imu,
+                channel: channel0 + axis,
+                size: sign * size,
+                start: f64::NEG_INFINITY,
+                end: f64::INFINITY,
+            };
+            let r = replay_parity(log, kind, ts, train_s, Some(injection))?;
+            let sensor = 3 * imu + axis;
+            let from = r.monitoring_from.unwrap_or(f64::INFINITY);
+            let delay = r
+                .isolations
+                .iter()
+                .find(|(k, t)| *k == sensor && *t < from + STEP_ISOLATE_WITHIN_S)
+                .map(|(_, t)| (t - from).max(0.0));
+            let wrong_isolation = r.isolations.iter().any(|(k, t)| *k != sensor && *t < end_s);
+            Ok(PowerUpCase {
+                train_start: ts,
+                injection,
+                delay,
+                wrong_isolation,
+            })
+        })
+        .collect()
 }

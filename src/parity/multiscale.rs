@@ -1,0 +1,701 @@
+//! Parity tests for real flights: in-flight relative calibration, robust
+//! (Huber-clipped) block residuals and a generalised likelihood test on
+//! window means at several time scales, each with a covariance learned from
+//! the data.
+//!
+//! Why not the white-noise χ² of SPEC §7 on raw samples: on a real board
+//! (ArduPilot log171, three IMUs logged at 49 Hz) the per-sample residual
+//! between IMUs is 1–12 °/s of vibration aliased by point sampling, strongly
+//! time-correlated, and the IMUs differ by up to 14 % in scale and by a few
+//! milliseconds in delay. What is left after a relative calibration is a
+//! slowly wandering residual whose 10-s means stay within a few tenths of a
+//! °/s. So this module
+//! 1. averages samples into blocks (≈ 0.25 s) — the calibration then
+//!    regresses on block means, where the vibration noise of the regressor
+//!    is small (no errors-in-variables attenuation of the scale terms);
+//! 2. learns, by recursive least squares with forgetting, the parity vector
+//!    as `p̄ ≈ C φ`, `φ = [1, x̄ − x_ref, Δx̄, e − e_ref]`: offset (relative
+//!    biases), motion leakage (relative scale and misalignment, `V(M−I)H` of
+//!    SPEC §7), time skew (`Δx̄`, the centred block difference: a relative
+//!    delay δ between IMUs leaves `−δ ẋ` in the parity vector) and
+//!    vibration rectification (`e_k`, each sensor's variance within the
+//!    block: an IMU's DC shift under vibration, the "accel-Z aliasing"
+//!    ArduPilot warns of, grows with the vibration it sees through its own
+//!    non-linearity and filter — on log171 it moves IMU2's a_z by 1.2 m/s²
+//!    for seconds, and these regressors take the worst 2.5-s excursion of
+//!    the a_z residuals from 1.2–1.7 to ≈ 0.3 m/s²); learning is frozen
+//!    while any test is above a fraction of its threshold;
+//! 3. clips each block residual to a Mahalanobis norm (Huber), so one
+//!    violent manoeuvre cannot move a window mean by more than a bounded
+//!    amount while a persistent bias passes unclipped;
+//! 4. tests the window means over several lengths (default 2.5, 5, 10 s)
+//!    with the GLR of a single-sensor bias, `max_k (v_kᵀ Σ⁻¹ r̄)² / v_kᵀ Σ⁻¹ v_k`,
+//!    where Σ is *that window length's* covariance learned from the healthy
+//!    flight (so time correlation is in it by construction) plus the
+//!    calibration's own prediction uncertainty `φ̄ᵀ P φ̄ Σ_b`. Under no fault
+//!    each score is χ²(1), so the threshold is the χ²(1) quantile at the
+//!    configured false-alarm probability per decision;
+//! 5. names a sensor only when its hypothesis beats the runner-up by a
+//!    likelihood-ratio margin: with a noisy third sensor two hypotheses can
+//!    explain a window almost equally well, and naming the wrong one would
+//!    remove a healthy sensor.
+
+use nalgebra::{SMatrix, SVector, Vector3};
+
+use crate::math::{cholesky, cholesky_solve_right, Real};
+
+/// Sensors whose own vibration energy is a regressor (the first nine).
+pub const VIBRATION_REGRESSORS: usize = 9;
+/// Regressors of the relative calibration:
+/// `[1, x̄ − x_ref, Δx̄, e_0 − e_0,ref, …, e_8 − e_8,ref]`.
+pub const REGRESSORS: usize = 7 + VIBRATION_REGRESSORS;
+/// Number of window lengths tested.
+pub const SCALES: usize = 3;
+
+type Phi<T> = SVector<T, REGRESSORS>;
+
+/// Configuration of the multi-scale tests (part of
+/// [`ParityConfig`](super::ParityConfig)).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct MultiscaleConfig<T> {
+    /// Window lengths in blocks, ascending, the longest at most the
+    /// monitor's `W`.
+    pub scales: [u16; SCALES],
+    /// False-alarm probability of one score (one sensor hypothesis, one
+    /// window length, one decision); the threshold is its χ²(1) quantile.
+    pub false_alarm: f64,
+    /// Likelihood-ratio margin (χ² units) by which the named sensor's
+    /// hypothesis must beat the runner-up before it is isolated.
+    pub isolation_margin: T,
+    /// Block residuals are clipped to a Mahalanobis norm of
+    /// `√dim + huber` (block-covariance units).
+    pub huber: T,
+    /// The shortest window is also tested *unclipped*, against this
+    /// multiple of the threshold: clipping bounds what one block can add,
+    /// so without this a fault of any size would score no more than a
+    /// clipped one. Large faults are found here at once; manoeuvre
+    /// transients stay below it (on log171 the accelerometers' vibration
+    /// events reach 20× the threshold on a 2.5-s window; 50× is a window
+    /// mean about 35 σ off, which any fault ten times the detectable size
+    /// exceeds).
+    pub gross_factor: T,
+    /// Memory of the in-flight calibration, blocks (RLS forgetting).
+    pub calibration_blocks: T,
+    /// Memory of the learned covariances, blocks.
+    pub variance_blocks: T,
+    /// Learning is frozen while any score is at or above this fraction of
+    /// the threshold, and for the longest window after it.
+    pub learn_below: T,
+    /// Ridge on each leakage (scale/misalignment) coefficient, unit² per
+    /// block: the prior that the IMUs agree in scale.
+    pub ridge_motion: T,
+    /// Ridge on each skew coefficient, unit² per block.
+    pub ridge_skew: T,
+    /// Ridge on the vibration-rectification coefficients, unit² per block.
+    pub ridge_vibration: T,
+    /// Use each sensor's block variance as a regressor (vibration
+    /// rectification). On log171 it is what keeps the accelerometers quiet;
+    /// for the gyros it adds parameters and costs sensitivity, so their
+    /// defaults leave it off.
+    pub vibration: bool,
+    /// Largest relative bias one sensor may carry at the end of training
+    /// (after the turn-on calibration the autopilot applies); a larger one
+    /// is a fault present from power-up, reported instead of learned.
+    pub offset_limit: T,
+}
+
+impl<T: Real> MultiscaleConfig<T> {
+    /// Defaults for blocks of ≈ 0.25 s: windows of 10, 20, 40 blocks,
+    /// α = 1e-6 per score (χ²(1) threshold 23.9: with 4 decisions/s and
+    /// three window lengths that is ≈ 0.4 expected false scores in 10 h if
+    /// the learned covariances were exact), isolation margin 10.8 (χ²(1)
+    /// at 1e-3), Huber excess 0.5, calibration memory 480 blocks (2 min),
+    /// covariance memory 480 blocks, learning frozen above a quarter of the
+    /// threshold. `unit` is the sensor's natural scale (1 °/s for gyros,
+    /// 0.1 m/s² for accelerometers) and sets the ridges and offset limit.
+    pub fn new(unit: T, offset_limit: T) -> Self {
+        Self {
+            scales: [10, 20, 40],
+            false_alarm: 1e-6,
+            isolation_margin: T::lit(10.8),
+            huber: T::lit(0.5),
+            gross_factor: T::lit(50.0),
+            calibration_blocks: T::lit(480.0),
+            variance_blocks: T::lit(480.0),
+            learn_below: T::lit(0.25),
+            ridge_motion: unit * unit * T::lit(10.0),
+            ridge_skew: unit * unit * T::lit(0.1),
+            ridge_vibration: unit * unit * T::lit(0.1),
+            vibration: false,
+            offset_limit,
+        }
+    }
+
+    /// Checks every field: ascending non-zero scales within `w` blocks,
+    /// α in (0, 0.5), finite positive margins, memories above one block,
+    /// `learn_below` in (0, 1], non-negative ridges and a positive offset
+    /// limit. Returns the name of the first bad field.
+    pub fn check(&self, w: usize) -> Result<(), &'static str> {
+        let [a, b, c] = self.scales;
+        if a == 0 || a > b || b > c || usize::from(c) > w {
+            return Err("multiscale.scales");
+        }
+        if !(self.false_alarm > 0.0 && self.false_alarm < 0.5) {
+            return Err("multiscale.false_alarm");
+        }
+        let positive = |x: T| x.finite() && x > T::zero();
+        if !positive(self.isolation_margin) {
+            return Err("multiscale.isolation_margin");
+        }
+        if !positive(self.huber) {
+            return Err("multiscale.huber");
+        }
+        if !(self.gross_factor.finite() && self.gross_factor >= T::one()) {
+            return Err("multiscale.gross_factor");
+        }
+        if !(self.calibration_blocks.finite() && self.calibration_blocks > T::one()) {
+            return Err("multiscale.calibration_blocks");
+        }
+        if !(self.variance_blocks.finite() && self.variance_blocks > T::one()) {
+            return Err("multiscale.variance_blocks");
+        }
+        if !(positive(self.learn_below) && self.learn_below <= T::one()) {
+            return Err("multiscale.learn_below");
+        }
+        if !(self.ridge_motion.finite() && self.ridge_motion >= T::zero()) {
+            return Err("multiscale.ridge_motion");
+        }
+        if !(self.ridge_skew.finite() && self.ridge_skew >= T::zero()) {
+            return Err("multiscale.ridge_skew");
+        }
+        if !(self.ridge_vibration.finite() && self.ridge_vibration >= T::zero()) {
+            return Err("multiscale.ridge_vibration");
+        }
+        if !positive(self.offset_limit) {
+            return Err("multiscale.offset_limit");
+        }
+        Ok(())
+    }
+}
+
+/// One decision of the multi-scale tests.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct MultiscaleDecision<T> {
+    /// Largest score ÷ threshold over sensors and window lengths (alarm
+    /// above 1).
+    pub ratio: T,
+    /// Window length (index into `scales`) of that score.
+    pub scale: usize,
+    /// Sensor whose bias hypothesis explains that window best.
+    pub suspect: Option<usize>,
+    /// Its least-squares bias estimate (unit of the sensors).
+    pub bias: T,
+    /// Score margin of the suspect over the runner-up hypothesis (χ² units).
+    pub margin: T,
+    /// Sensor to isolate: the best hypothesis of the alarming window length
+    /// where it beats the runner-up by the widest margin (longer windows
+    /// average a noisy third sensor down and tell two candidates apart).
+    pub isolate: Option<(usize, T)>,
+    /// The calibration and covariances learned from this block.
+    pub learning: bool,
+}
+
+/// Learning state of the tests in one parity space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Multiscale<T: Real, const N: usize, const W: usize> {
+    cfg: MultiscaleConfig<T>,
+    dim: usize,
+    /// Information matrix of the RLS (`Σ λ^k φ φᵀ`).
+    sxx: SMatrix<T, REGRESSORS, REGRESSORS>,
+    /// Cross moments `Σ λ^k p̄ φᵀ`.
+    spx: SMatrix<T, N, REGRESSORS>,
+    /// Ridge (diagonal) added to `sxx` before solving.
+    ridge: Phi<T>,
+    /// References the motion and vibration regressors are centred on
+    /// (first block).
+    x_ref: Option<(Vector3<T>, SVector<T, VIBRATION_REGRESSORS>)>,
+    /// Block covariance of the residual (padded with identity beyond `dim`).
+    block_cov: SMatrix<T, N, N>,
+    /// Covariance of the window mean at each length.
+    window_cov: [SMatrix<T, N, N>; SCALES],
+    /// Clipped residuals and regressors of the last `W` blocks.
+    residuals: [SVector<T, N>; W],
+    /// The same residuals unclipped (for the gross test).
+    raw: [SVector<T, N>; W],
+    /// Covariance updates so far (the EWMA weight is `1/min(updates,
+    /// variance_blocks)`).
+    updates: u32,
+    regressors: [Phi<T>; W],
+    head: usize,
+    filled: usize,
+    /// Blocks since a score was last at or above the learning fraction.
+    quiet_blocks: u32,
+    threshold: T,
+}
+
+impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
+    /// Fresh tests for a parity space of dimension `dim` with the χ²(1)
+    /// threshold `threshold`.
+    pub fn new(cfg: MultiscaleConfig<T>, dim: usize, threshold: T) -> Self {
+        let ridge = Phi::<T>::from_fn(|i, _| match i {
+            0 => T::lit(1e-9),
+            1..=3 => cfg.ridge_motion,
+            4..=6 => cfg.ridge_skew,
+            _ => cfg.ridge_vibration,
+        });
+        Self {
+            cfg,
+            dim,
+            sxx: SMatrix::zeros(),
+            spx: SMatrix::zeros(),
+            ridge,
+            x_ref: None,
+            block_cov: SMatrix::identity(),
+            window_cov: [SMatrix::identity(); SCALES],
+            residuals: [SVector::zeros(); W],
+            raw: [SVector::zeros(); W],
+            updates: 0,
+            regressors: [Phi::zeros(); W],
+            head: 0,
+            filled: 0,
+            quiet_blocks: 0,
+            threshold,
+        }
+    }
+
+    /// The χ²(1) threshold of every score.
+    pub fn threshold(&self) -> T {
+        self.threshold
+    }
+
+    /// Regressor vector of a block with mean `x`, centred difference `dx`
+    /// and per-sensor variances `e` (sensors beyond
+    /// [`VIBRATION_REGRESSORS`] are left out).
+    pub fn regressor(
+        &mut self,
+        x: &Vector3<T>,
+        dx: &Vector3<T>,
+        e: &SVector<T, N>,
+    ) -> SVector<T, REGRESSORS> {
+        let ev = SVector::<T, VIBRATION_REGRESSORS>::from_fn(|i, _| {
+            if self.cfg.vibration {
+                e.get(i).copied().unwrap_or(T::zero())
+            } else {
+                T::zero()
+            }
+        });
+        let (x_ref, e_ref) = *self.x_ref.get_or_insert((*x, ev));
+        let c = x - x_ref;
+        let de = ev - e_ref;
+        Phi::<T>::from_fn(|i, _| match i {
+            0 => T::one(),
+            1..=3 => c.get(i - 1).copied().unwrap_or(T::zero()),
+            4..=6 => dx.get(i - 4).copied().unwrap_or(T::zero()),
+            _ => de.get(i - 7).copied().unwrap_or(T::zero()),
+        })
+    }
+
+    /// Adds one block to the calibration (training, or in flight while
+    /// quiet); `forget` applies the RLS forgetting factor first.
+    pub fn learn_calibration(&mut self, p: &SVector<T, N>, phi: &Phi<T>, forget: bool) {
+        if forget {
+            let lambda = T::one() - T::one() / self.cfg.calibration_blocks;
+            self.sxx *= lambda;
+            self.spx *= lambda;
+        }
+        self.sxx += phi * phi.transpose();
+        self.spx += p * phi.transpose();
+    }
+
+    /// The calibration's Cholesky factor of `sxx + ridge`.
+    fn calibration_factor(&self) -> Option<SMatrix<T, REGRESSORS, REGRESSORS>> {
+        let mut a = self.sxx;
+        for (i, r) in self.ridge.iter().enumerate() {
+            if let Some(d) = a.get_mut((i, i)) {
+                *d += *r;
+            }
+        }
+        cholesky(&a).ok()
+    }
+
+    /// Prior residual `p̄ − C φ` of a block (before it is learned) and the
+    /// Cholesky factor used, `None` when the calibration cannot be solved.
+    pub fn residual(&self, p: &SVector<T, N>, phi: &Phi<T>) -> Option<SVector<T, N>> {
+        let l = self.calibration_factor()?;
+        let c = cholesky_solve_right(&l, &self.spx);
+        let r = p - c * phi;
+        r.iter().all(|x| x.finite()).then_some(r)
+    }
+
+    /// `φᵀ (sxx + ridge)⁻¹ φ`: the calibration's prediction variance of a
+    /// (mean) regressor, in units of the block covariance.
+    fn prediction_weight(&self, phi: &Phi<T>) -> T {
+        let Some(l) = self.calibration_factor() else {
+            return T::zero();
+        };
+        // ‖L⁻¹ φ‖² by forward substitution.
+        let mut y = *phi;
+        for i in 0..REGRESSORS {
+            let mut s = y.get(i).copied().unwrap_or(T::zero());
+            for k in 0..i {
+                s -= l.get((i, k)).copied().unwrap_or(T::zero())
+                    * y.get(k).copied().unwrap_or(T::zero());
+            }
+            let d = l.get((i, i)).copied().unwrap_or(T::one());
+            if let Some(v) = y.get_mut(i) {
+                *v = s / d;
+            }
+        }
+        y.norm_squared()
+    }
+
+    /// Pushes a clipped residual, the raw one and its regressor into the
+    /// window.
+    fn push(&mut self, r: &SVector<T, N>, raw: &SVector<T, N>, phi: &Phi<T>) {
+        if let Some(slot) = self.residuals.get_mut(self.head) {
+            *slot = *r;
+        }
+        if let Some(slot) = self.raw.get_mut(self.head) {
+            *slot = *raw;
+        }
+        if let Some(slot) = self.regressors.get_mut(self.head) {
+            *slot = *phi;
+        }
+        self.head = (self.head + 1) % W.max(1);
+        self.filled = (self.filled + 1).min(W);
+    }
+
+    /// Window means of residual and regressor over each length (newest
+    /// blocks), `None` for a length not yet filled.
+    fn window_means(&self) -> [Option<(SVector<T, N>, Phi<T>)>; SCALES] {
+        let mut out = [None; SCALES];
+        let mut sr = SVector::<T, N>::zeros();
+        let mut sp = Phi::<T>::zeros();
+        let mut idx = self.head;
+        let mut scale = 0;
+        for n in 1..=self.filled {
+            idx = (idx + W - 1) % W.max(1);
+            if let (Some(r), Some(p)) = (self.residuals.get(idx), self.regressors.get(idx)) {
+                sr += r;
+                sp += p;
+            }
+            while let Some(len) = self.cfg.scales.get(scale) {
+                if usize::from(*len) != n {
+                    break;
+                }
+                let k = T::lit(n as f64);
+                if let Some(slot) = out.get_mut(scale) {
+                    *slot = Some((sr / k, sp / k));
+                }
+                scale += 1;
+            }
+        }
+        out
+    }
+
+    /// Ends training: the residuals of the second half (already pushed with
+    /// [`train_residual`](Self::train_residual)) give the block covariance;
+    /// each window length starts from the block covariance scaled by the
+    /// correlation seen over the shortest window, with the weight of
+    /// `train_blocks` observations. `None` if degenerate.
+    pub fn finish_training(&mut self, train_blocks: u32) -> Option<()> {
+        let n = self.filled;
+        if n < 8 {
+            return None;
+        }
+        let mut mean = SVector::<T, N>::zeros();
+        for r in self.residuals.iter().take(n) {
+            mean += r;
+        }
+        mean /= T::lit(n as f64);
+        let mut cov = SMatrix::<T, N, N>::zeros();
+        for r in self.residuals.iter().take(n) {
+            let d = r - mean;
+            cov += d * d.transpose();
+        }
+        cov /= T::lit((n - 1) as f64);
+        self.block_cov = pad(&cov, self.dim);
+        cholesky(&self.block_cov).ok()?;
+        // Correlation factor over the shortest window that fits in training:
+        // variance of overlapping window means ÷ the white-noise value.
+        let len = usize::from(self.cfg.scales[0]).min(n / 2).max(1);
+        let mut factor_sum = T::zero();
+        let mut count = 0usize;
+        let l = cholesky(&self.block_cov).ok()?;
+        let mut start = 0;
+        while start + len <= n {
+            let mut s = SVector::<T, N>::zeros();
+            for r in self.residuals.iter().skip(start).take(len) {
+                s += r - mean;
+            }
+            let w = s / T::lit(len as f64);
+            factor_sum += mahalanobis2(&l, &w);
+            count += 1;
+            start += 1;
+        }
+        let dimf = T::lit(self.dim.max(1) as f64);
+        let factor = if count > 0 {
+            (factor_sum / T::lit(count as f64) * T::lit(len as f64) / dimf).max(T::one())
+        } else {
+            T::one()
+        };
+        // Training is too short to see how the longer windows wander (a
+        // 10-s mean of 20 s of data is two numbers), so every length starts
+        // at the shortest window's covariance: no more sensitive than that
+        // until the flight itself has shown the longer windows to be
+        // quieter (the covariances keep learning while every test is quiet).
+        let shortest = T::lit(f64::from(self.cfg.scales[0]));
+        for cov_n in self.window_cov.iter_mut() {
+            *cov_n = pad(&(cov * (factor / shortest)), self.dim);
+        }
+        self.filled = 0;
+        self.head = 0;
+        self.quiet_blocks = 0;
+        // The training estimate weighs as much as the training blocks that
+        // made it; each quiet block in flight then adds one observation, up
+        // to the fixed memory `variance_blocks`.
+        self.updates = train_blocks;
+        Some(())
+    }
+
+    /// A training block of the second half: its (unclipped) prior residual
+    /// is kept for the covariance.
+    pub fn train_residual(&mut self, r: &SVector<T, N>, phi: &Phi<T>) {
+        self.push(r, r, phi);
+    }
+
+    /// Mean of the newest `len` unclipped residuals.
+    fn raw_mean(&self, len: usize) -> Option<SVector<T, N>> {
+        if len == 0 || self.filled < len {
+            return None;
+        }
+        let mut s = SVector::<T, N>::zeros();
+        let mut idx = self.head;
+        for _ in 0..len {
+            idx = (idx + W - 1) % W.max(1);
+            if let Some(r) = self.raw.get(idx) {
+                s += r;
+            }
+        }
+        Some(s / T::lit(len as f64))
+    }
+
+    /// Per-sensor relative bias the calibration has absorbed: the suspect
+    /// with its GLR bias estimate, when it exceeds the offset limit (a fault
+    /// present since power-up), and the runner-up margin. The offset is
+    /// the (forgetting-weighted) mean parity vector of the learned blocks —
+    /// the relative biases as the flight showed them on average — not the
+    /// regression's intercept, which sits wherever the regressors are
+    /// centred.
+    pub fn offset_fault(&self, v: &SMatrix<T, N, N>, active: &[bool; N]) -> Option<(usize, T, T)> {
+        let count = self.sxx.get((0, 0)).copied().unwrap_or(T::zero());
+        if count.partial_cmp(&T::one()) != Some(core::cmp::Ordering::Greater) {
+            return None;
+        }
+        let offset: SVector<T, N> = self.spx.column(0) / count;
+        // The offset is a long mean: its uncertainty is that of the longest
+        // window, not of one block (the block covariance would make every
+        // offset look insignificant next to the vibration).
+        let l = cholesky(&pad(self.window_cov.last()?, self.dim)).ok()?;
+        let (best, second) = best_two(&l, v, &offset, active);
+        let (k, score, bias) = best?;
+        let margin = score - second;
+        (bias.abs() > self.cfg.offset_limit).then_some((k, bias, margin))
+    }
+
+    /// One monitoring block: clips and stores the prior residual `r`, tests
+    /// every window length, and learns from the block when every score is
+    /// quiet. `p` and `phi` are the block's parity vector and regressor.
+    pub fn decide(
+        &mut self,
+        p: &SVector<T, N>,
+        phi: &Phi<T>,
+        r: &SVector<T, N>,
+        v: &SMatrix<T, N, N>,
+        active: &[bool; N],
+    ) -> MultiscaleDecision<T> {
+        let mut out = MultiscaleDecision::default();
+        let Ok(lb) = cholesky(&self.block_cov) else {
+            return out;
+        };
+        // Huber: bound the block's Mahalanobis norm.
+        let norm = mahalanobis2(&lb, r).sqrt();
+        let bound = T::lit(self.dim as f64).sqrt() + self.cfg.huber;
+        let clipped = if norm > bound && norm.finite() {
+            r * (bound / norm)
+        } else {
+            *r
+        };
+        self.push(&clipped, r, phi);
+        let means = self.window_means();
+        let mut best_ratio = T::zero();
+        let mut isolate: Option<(usize, T)> = None;
+        for (i, (m, cov)) in means.iter().zip(self.window_cov.iter()).enumerate() {
+            let Some((rbar, phibar)) = m else {
+                continue;
+            };
+            let total = cov + self.block_cov * self.prediction_weight(phibar);
+            let Ok(l) = cholesky(&pad(&total, self.dim)) else {
+                continue;
+            };
+            let (best, second) = best_two(&l, v, rbar, active);
+            let Some((k, score, bias)) = best else {
+                continue;
+            };
+            let ratio = score / self.threshold;
+            let margin = score - second;
+            if ratio > T::one() && isolate.is_none_or(|(_, m)| margin > m) {
+                isolate = Some((k, margin));
+            }
+            if ratio > best_ratio || out.suspect.is_none() {
+                best_ratio = ratio;
+                out = MultiscaleDecision {
+                    ratio,
+                    scale: i,
+                    suspect: Some(k),
+                    bias,
+                    margin,
+                    isolate: None,
+                    learning: false,
+                };
+            }
+        }
+        // Gross test: the shortest window unclipped, at `gross_factor` × the
+        // threshold.
+        let short = usize::from(self.cfg.scales[0]);
+        if let (Some(rbar), Some(cov)) = (self.raw_mean(short), self.window_cov.first()) {
+            if let Ok(l) = cholesky(&pad(cov, self.dim)) {
+                let (best, second) = best_two(&l, v, &rbar, active);
+                if let Some((k, score, bias)) = best {
+                    let ratio = score / (self.threshold * self.cfg.gross_factor);
+                    if ratio > T::one() && ratio > best_ratio {
+                        best_ratio = ratio;
+                        out.ratio = ratio;
+                        out.scale = 0;
+                        out.suspect = Some(k);
+                        out.bias = bias;
+                        out.margin = score - second;
+                        isolate = Some((k, score - second));
+                    }
+                }
+            }
+        }
+        out.isolate = isolate;
+        if !best_ratio.finite() {
+            out.ratio = T::zero();
+            out.suspect = None;
+            return out;
+        }
+        // Learn only from quiet blocks, and only once the longest window
+        // has been quiet throughout (a fault's onset must not be learned
+        // before it is visible).
+        if best_ratio < self.cfg.learn_below {
+            self.quiet_blocks = self.quiet_blocks.saturating_add(1);
+        } else {
+            self.quiet_blocks = 0;
+        }
+        let longest = u32::from(self.cfg.scales[SCALES - 1]);
+        if self.quiet_blocks > longest {
+            out.learning = true;
+            self.learn_calibration(p, phi, true);
+            self.updates = self.updates.saturating_add(1);
+            let w = T::one() / T::lit(f64::from(self.updates)).min(self.cfg.variance_blocks);
+            let d = clipped * clipped.transpose();
+            self.block_cov = pad(&(self.block_cov * (T::one() - w) + d * w), self.dim);
+            for (cov, m) in self.window_cov.iter_mut().zip(means.iter()) {
+                if let Some((rbar, _)) = m {
+                    *cov = pad(
+                        &(*cov * (T::one() - w) + rbar * rbar.transpose() * w),
+                        self.dim,
+                    );
+                }
+            }
+        }
+        out
+    }
+
+    /// Forgets the window (after a reconfiguration) and re-arms the quiet
+    /// counter.
+    pub fn clear_window(&mut self) {
+        self.filled = 0;
+        self.head = 0;
+        self.quiet_blocks = 0;
+    }
+
+    /// Carries everything learned into a sub-space: `c` maps this space's
+    /// parity vectors to the sub-space's (`p_new = c p`), `dim` is the new
+    /// dimension.
+    pub fn transform(&mut self, c: &SMatrix<T, N, N>, dim: usize) {
+        self.dim = dim;
+        self.spx = c * self.spx;
+        self.block_cov = pad(&(c * self.block_cov * c.transpose()), dim);
+        for cov in self.window_cov.iter_mut() {
+            *cov = pad(&(c * *cov * c.transpose()), dim);
+        }
+        for r in self.residuals.iter_mut() {
+            *r = c * *r;
+        }
+        self.clear_window();
+    }
+}
+
+/// `dᵀ A⁻¹ d` from the Cholesky factor `L` of `A`.
+fn mahalanobis2<T: Real, const N: usize>(l: &SMatrix<T, N, N>, d: &SVector<T, N>) -> T {
+    let y = cholesky_solve_right(l, &d.transpose());
+    y.dot(&d.transpose())
+}
+
+/// The covariance restricted to the first `dim` coordinates, with identity
+/// beyond so the fixed-size factorisation is full rank.
+fn pad<T: Real, const N: usize>(a: &SMatrix<T, N, N>, dim: usize) -> SMatrix<T, N, N> {
+    SMatrix::<T, N, N>::from_fn(|i, j| {
+        if i < dim && j < dim {
+            // Symmetrised: EWMA updates keep it so only up to rounding.
+            let aij = a.get((i, j)).copied().unwrap_or(T::zero());
+            let aji = a.get((j, i)).copied().unwrap_or(T::zero());
+            (aij + aji) * T::lit(0.5)
+        } else if i == j {
+            T::one()
+        } else {
+            T::zero()
+        }
+    })
+}
+
+/// Best single-sensor hypothesis `(k, score, bias)` for the parity residual
+/// `r` with covariance factor `l`, and the runner-up's score.
+fn best_two<T: Real, const N: usize>(
+    l: &SMatrix<T, N, N>,
+    v: &SMatrix<T, N, N>,
+    r: &SVector<T, N>,
+    active: &[bool; N],
+) -> (Option<(usize, T, T)>, T) {
+    // a_k = Σ⁻¹ v_k for every column at once: rows of Vᵀ Σ⁻¹.
+    let a = cholesky_solve_right(l, &v.transpose());
+    let z = a * r;
+    let mut best: Option<(usize, T, T)> = None;
+    let mut second = T::zero();
+    for k in 0..N {
+        if !active.get(k).copied().unwrap_or(false) {
+            continue;
+        }
+        let q = a.row(k).dot(&v.column(k).transpose());
+        if q.partial_cmp(&T::lit(1e-12)) != Some(core::cmp::Ordering::Greater) {
+            continue;
+        }
+        let zk = z.get(k).copied().unwrap_or(T::zero());
+        let score = zk * zk / q;
+        match best {
+            Some((_, s, _)) if score <= s => second = second.max(score),
+            _ => {
+                if let Some((_, s, _)) = best {
+                    second = second.max(s);
+                }
+                best = Some((k, score, zk / q));
+            }
+        }
+    }
+    (best, second)
+}
