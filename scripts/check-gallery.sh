@@ -4,7 +4,7 @@
 # To update: cargo sim gallery   (writes docs/gallery), then commit.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo run -q -p hal-sim --release --bin imu-fdi-sim -- gallery --out target/gallery > /dev/null
+cargo run -q -p imu-fdi-cli --release --bin imu-fdi-sim -- gallery --out target/gallery > /dev/null
 status=0
 for f in docs/gallery/*.png; do
   if ! cmp -s "$f" "target/gallery/$(basename "$f")"; then

@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # On QEMU's netduinoplus2 (STM32F405, Cortex-M4F):
-#  1. the on-target tests (hal-sim/src/bin/target_tests.rs): f32 numerics on
+#  1. the on-target tests (qemu/src/bin/target_tests.rs): f32 numerics on
 #     the emulated FPU against host-computed expectations, and a profile of
 #     the pieces of a monitor step in instructions;
-#  2. the software-in-the-loop image (hal-sim/src/bin/sil.rs): scenario S2
+#  2. the software-in-the-loop image (qemu/src/bin/sil.rs): scenario S2
 #     straight into the f32 monitor — instructions per step, peak stack,
 #     flash and static RAM (the budget figures);
 #  3. the same image along the firmware's data path (feature sil-chip): the

@@ -7,7 +7,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 DATA=${DATA:-../shared/data}
 BIN=./target/release/imu-fdi-sim
-cargo build -q -p hal-sim --release --bin imu-fdi-sim
+cargo build -q -p imu-fdi-cli --release --bin imu-fdi-sim
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 

@@ -49,3 +49,14 @@ pub mod model;
 pub mod monitor;
 pub mod parity;
 pub mod stats;
+
+/// The vector types of the monitors' signatures: an IMU sample
+/// `[a_x, a_y, a_z, p, q, r]`, an aiding measurement and its availability,
+/// the state, and the 6×6 matrices.
+pub use model::{ImuVec, Mat6, MeasVec, Measurement, StateVec};
+/// The `nalgebra` the API is written in (`no_std`, `libm`): use it for the
+/// vectors and matrices of the signatures without a version to match.
+pub use nalgebra;
+/// `Vector3` (gyro rates, lever arms, fused outputs) and `Matrix3` (array
+/// rotations) of the signatures.
+pub use nalgebra::{Matrix3, Vector3};

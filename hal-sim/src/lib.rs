@@ -2,13 +2,16 @@
 //!
 //! The simulated hardware for `imu-fdi`: deterministic vehicle trajectories
 //! with exact IMU truth ([`trajectory`]), a datasheet-class IMU error model
-//! ([`imu_model`]), aiding sensors at their own rates, fault injection
-//! ([`fault`]) and scenarios as data ([`scenario`]), a three-IMU flight
-//! that looks like a real one (vibration, each IMU's signal chain, the
-//! logger's decimation; fitted to ArduPilot log171: [`realistic`]), all
-//! `no_std` so the same models can run inside firmware. With the default `std` feature it adds the
-//! scenario runner and SPEC §9 metrics ([`runner`], [`metrics`]), the SPEC §10
-//! replay format ([`replay`]) and the `imu-fdi-sim` CLI.
+//! ([`imu_model`]), aiding sensors at their own rates, an emulated
+//! ICM-42688-P ([`emulated_icm42688`]), redundant arrays ([`array`](mod@array)), fault
+//! injection ([`fault`]), scenarios as data ([`scenario`]) and a three-IMU
+//! flight that looks like a real one (vibration, each IMU's signal chain,
+//! the logger's decimation; fitted to ArduPilot log171: [`realistic`]), all
+//! `no_std` so the same models run inside firmware (the `imu-fdi-qemu`
+//! images). With the default `std` feature it adds the scenario runner and
+//! SPEC §9 metrics (`runner`, `metrics`), which the core crate's scenario
+//! tests use; the host tools (the `imu-fdi-sim` CLI, log import and replay,
+//! parity replay, campaigns, plots) are the `imu-fdi-cli` crate.
 #![cfg_attr(not(feature = "std"), no_std)]
 
 pub mod array;
@@ -17,8 +20,6 @@ pub mod emulated_icm42688;
 pub mod fault;
 pub mod imu_model;
 pub mod ots;
-#[cfg(all(target_os = "none", feature = "sil"))]
-pub mod qemu;
 pub mod realistic;
 pub mod scenario;
 pub mod setup;
@@ -27,31 +28,9 @@ pub mod target_checks;
 pub mod trajectory;
 
 #[cfg(feature = "std")]
-pub mod array_run;
-#[cfg(feature = "std")]
-pub mod array_sweep;
-#[cfg(feature = "std")]
-pub mod campaign;
-#[cfg(feature = "std")]
-pub mod inject;
-#[cfg(feature = "std")]
-pub mod log_import;
-#[cfg(feature = "std")]
 pub mod metrics;
 #[cfg(feature = "std")]
-pub mod parity_campaign;
-#[cfg(feature = "std")]
-pub mod parity_replay;
-#[cfg(feature = "std")]
-pub mod plot;
-#[cfg(feature = "std")]
-pub mod replay;
-#[cfg(feature = "std")]
 pub mod runner;
-#[cfg(feature = "std")]
-pub mod scenario_file;
-#[cfg(feature = "std")]
-pub mod stats_ci;
 
 pub use fault::{FaultKind, FaultRow, FaultSizes};
 pub use imu_model::{ImuErrors, SimImu, TriadErrors};

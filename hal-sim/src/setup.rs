@@ -171,7 +171,7 @@ pub fn chip_config() -> imu_fdi::imu::icm42688::Config {
 
 /// Scenario `scn` (seed `seed`) through the real ICM-42688-P driver reading
 /// hal-sim's register-level emulated chip, into the periodic
-/// [`Monitor`](imu_fdi::monitor::Monitor) task — the firmware's data path,
+/// [`MonitorTask`](imu_fdi::monitor::MonitorTask) — the firmware's data path,
 /// shared by the host CLI (`detections --via-chip`) and the QEMU image so
 /// both run the same code. `timed` is handed each `task.step` call to run
 /// (the QEMU image counts its instructions). Returns the tally, or `None` if the
@@ -184,7 +184,7 @@ pub fn run_via_chip(
     use core::cell::RefCell;
     use imu_fdi::imu::icm42688::Icm42688;
     use imu_fdi::model::{MeasVec, Measurement};
-    use imu_fdi::monitor::Monitor;
+    use imu_fdi::monitor::MonitorTask;
 
     use crate::emulated_icm42688::{EmulatedIcm42688, SharedBus};
 
@@ -195,7 +195,7 @@ pub fn run_via_chip(
 
     let chip = RefCell::new(EmulatedIcm42688::new());
     let imu = Icm42688::new(SharedBus(&chip), chip_config(), &mut NoDelay).ok()?;
-    let mut task = Monitor::<_>::new(imu, monitor_config(scn, &RunOptions::default())).ok()?;
+    let mut task = MonitorTask::<_>::new(imu, monitor_config(scn, &RunOptions::default())).ok()?;
     let mut tally = DetectionTally::new(scn);
     for s in crate::sim::Simulator::new(scn, seed) {
         if let Some(v) = s.imu {

@@ -187,7 +187,7 @@ impl Iterator for Simulator {
         } else {
             truth
         };
-        if self.k % self.vel_every == 0 {
+        if self.k.is_multiple_of(self.vel_every) {
             let x = StateVec::from(seen.state);
             let v = match self.scenario.aiding.kind {
                 AidingKind::DvlCompass => [seen.state[0], seen.state[1], seen.state[2]],
@@ -207,7 +207,7 @@ impl Iterator for Simulator {
                 }
             }
         }
-        if self.k % self.att_every == 0 {
+        if self.k.is_multiple_of(self.att_every) {
             let sig = self.scenario.aiding.att_sigma;
             for i in 0..3 {
                 let n = self.gauss();

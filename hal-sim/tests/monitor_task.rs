@@ -1,4 +1,4 @@
-//! The periodic `Monitor` task with the real ICM-42688-P driver on the
+//! The periodic `MonitorTask` with the real ICM-42688-P driver on the
 //! emulated chip, through S2 with 2 % of the SPI reads failing.
 #![allow(
     clippy::unwrap_used,
@@ -16,7 +16,7 @@ use hal_sim::runner::{monitor_config, RunOptions};
 use hal_sim::{Scenario, Simulator};
 use imu_fdi::imu::icm42688::{AccelRange, Config, GyroRange, Icm42688, Odr};
 use imu_fdi::model::{MeasVec, Measurement};
-use imu_fdi::monitor::{Monitor, Phase};
+use imu_fdi::monitor::{MonitorTask, Phase};
 use rand::{Rng, SeedableRng};
 
 #[test]
@@ -30,7 +30,8 @@ fn s2_with_two_percent_failed_reads_still_detects_every_fault() {
         ui_filter_bw: 1,
     };
     let imu = Icm42688::new(SharedBus(&chip), cfg, &mut NoopDelay::new()).unwrap();
-    let mut task = Monitor::<_>::new(imu, monitor_config(&scn, &RunOptions::default())).unwrap();
+    let mut task =
+        MonitorTask::<_>::new(imu, monitor_config(&scn, &RunOptions::default())).unwrap();
     let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(9);
     let (mut injected, mut detected, mut false_flags) = (0u32, [false; 6], 0u32);
     let mut last = None;
@@ -96,7 +97,7 @@ fn s2_through_the_task_with_the_two_stage_ukf() {
     };
     let imu = Icm42688::new(SharedBus(&chip), cfg, &mut NoopDelay::new()).unwrap();
     let ots = OtsukfMonitor::<f32>::new(otsukf_config(&scn, Setting::Realistic)).unwrap();
-    let mut task = Monitor::with_monitor(imu, ots);
+    let mut task = MonitorTask::with_monitor(imu, ots);
     let (mut detected, mut false_flags) = ([false; 6], 0u32);
     let (mut raw_err, mut corr_err, mut n) = (0.0f64, 0.0f64, 0u32);
     for s in Simulator::new(&scn, 1) {

@@ -3,7 +3,7 @@
 //!
 //! A hardware timer (TIM2) paces the monitor task at 100 Hz; each period the
 //! measured `dt` (DWT cycle counter) goes with the IMU sample into
-//! [`imu_fdi::monitor::Monitor`], and a one-line report is logged over RTT
+//! [`imu_fdi::monitor::MonitorTask`], and a one-line report is logged over RTT
 //! with defmt once per second. Panics and HardFaults are reported and stop.
 //!
 //! Aiding: this image is the bench build — the board is assumed at rest, so
@@ -21,7 +21,7 @@ use defmt_rtt as _;
 use embedded_hal_bus::spi::ExclusiveDevice;
 use imu_fdi::imu::icm42688::{AccelRange, Config, GyroRange, Icm42688, Odr};
 use imu_fdi::model::{MeasVec, Measurement};
-use imu_fdi::monitor::{Monitor, UkfMonitorConfig};
+use imu_fdi::monitor::{MonitorTask, UkfMonitorConfig};
 use panic_probe as _;
 use stm32f4xx_hal::{pac, prelude::*, rcc, spi::Mode};
 
@@ -80,7 +80,7 @@ fn main() -> ! {
     };
     let mut cfg = UkfMonitorConfig::<f32>::auv();
     cfg.imu_period = 1.0 / RATE_HZ as f32;
-    let mut task: Monitor<_> = match Monitor::new(imu, cfg) {
+    let mut task: MonitorTask<_> = match MonitorTask::new(imu, cfg) {
         Ok(t) => t,
         Err(e) => defmt::panic!("monitor configuration: {}", e),
     };
@@ -99,7 +99,7 @@ fn main() -> ! {
         let now = cortex_m::peripheral::DWT::cycle_count();
         let dt = now.wrapping_sub(last) as f32 / sysclk;
         last = now;
-        let aiding = if n % AIDING_EVERY == 0 {
+        let aiding = if n.is_multiple_of(AIDING_EVERY) {
             bench_aiding(last_accel)
         } else {
             Measurement::none()
@@ -110,7 +110,7 @@ fn main() -> ! {
         if !r.read_failed {
             last_accel = [r.corrected[0], r.corrected[1], r.corrected[2]];
         }
-        if n % RATE_HZ == 0 {
+        if n.is_multiple_of(RATE_HZ) {
             defmt::info!(
                 "t={}s {} status={} fault={} health={} reads failed={} step={} cycles",
                 n / RATE_HZ,

@@ -2,6 +2,7 @@
 //! the windowed t-test, the threshold and decoupling-matrix methods,
 //! signature-based (GLR) isolation, and the fault estimators of SPEC §6.
 
+mod decide;
 mod decouple;
 mod estimator;
 mod glr;
@@ -9,6 +10,7 @@ mod persistence;
 mod ttest;
 mod window;
 
+pub(crate) use decide::{test_flags, window_evidence, DecisionRule, WindowEvidence};
 pub use decouple::{
     decouple_flags, paper_matrix, runtime_sign_matrix, PAPER_MATRIX_AS_PRINTED,
     PAPER_MATRIX_CORRECTED,

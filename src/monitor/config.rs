@@ -1,21 +1,63 @@
+use core::fmt;
+
 use crate::detect::{Detector, Statistic};
-use crate::filter::SigmaParams;
+use crate::filter::{SigmaParams, SigmaWeights};
 use crate::math::Real;
 use crate::model::{AidingKind, ImuNoisePsd, ImuVec, MeasVec, StateVec, G0};
 
-/// A configuration the monitor cannot run with.
+/// A configuration the monitor cannot run with. Its `Display` names the
+/// field.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ConfigError {
-    /// The sigma-point parameters give no real spread.
+    /// The sigma-point parameters (`sigma`) give no real spread.
     SigmaParams,
-    /// α outside (0, 0.5] or a window too short for a t-test.
+    /// `alpha` outside (0, 0.5] or a window too short for a t-test.
     TTest,
-    /// A noise, σ, rate or time constant is not finite and positive.
-    NonPositive,
-    /// The aiding latency is negative or longer than the state history.
+    /// This field (a noise, σ, rate, time constant, threshold or count) is
+    /// zero, negative or not finite.
+    NonPositive(&'static str),
+    /// This field is not finite or outside its range (a fraction beyond 1, a
+    /// negative time, a hysteresis threshold above the one it pairs with).
+    OutOfRange(&'static str),
+    /// `aiding_delay_s` is negative or longer than the state history.
     AidingDelay,
 }
+
+impl ConfigError {
+    /// The configuration field at fault.
+    pub fn field(&self) -> &'static str {
+        match self {
+            Self::SigmaParams => "sigma",
+            Self::TTest => "alpha",
+            Self::NonPositive(f) | Self::OutOfRange(f) => f,
+            Self::AidingDelay => "aiding_delay_s",
+        }
+    }
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let field = self.field();
+        match self {
+            Self::SigmaParams => {
+                write!(f, "{field}: the sigma-point parameters give no real spread")
+            }
+            Self::TTest => write!(
+                f,
+                "{field}: outside (0, 0.5], or the window is too short for a t-test"
+            ),
+            Self::NonPositive(_) => write!(f, "{field}: must be finite and positive"),
+            Self::OutOfRange(_) => write!(f, "{field}: not finite or outside its range"),
+            Self::AidingDelay => write!(
+                f,
+                "{field}: negative, or longer than the state history (MAX_DELAY_STEPS IMU periods)"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for ConfigError {}
 
 /// Everything the UKF monitor is tuned by. Units are SI (m/s², rad/s, m/s,
 /// rad, s); noise densities are PSDs (see [`ImuNoisePsd`]).
@@ -196,20 +238,28 @@ impl<T: Real> UkfMonitorConfig<T> {
         c
     }
 
-    /// Checks the values that would make the filter or the tests meaningless.
+    /// Checks every field: what would make the filter or the tests
+    /// meaningless (a NaN statistic) or silent (a test that can never fire).
+    /// The error names the first offending field.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let pos = |v: T| v.finite() && v > T::zero();
-        let all_pos = self.process_noise.psd.iter().all(|v| pos(*v))
-            && self.meas_sigma.iter().all(|v| pos(*v))
-            && self.initial_sigma.iter().all(|v| pos(*v))
-            && self.full_scale.iter().all(|v| pos(*v))
-            && pos(self.imu_period)
-            && pos(self.learn_tau_s)
-            && pos(self.drift_tau_s)
-            && pos(self.aiding_timeout_s)
-            && pos(self.gravity);
-        if !all_pos {
-            return Err(ConfigError::NonPositive);
+        let non_neg = |v: T| v.finite() && v >= T::zero();
+        let positive: [(&'static str, bool); 9] = [
+            (
+                "process_noise",
+                self.process_noise.psd.iter().all(|v| pos(*v)),
+            ),
+            ("meas_sigma", self.meas_sigma.iter().all(|v| pos(*v))),
+            ("initial_sigma", self.initial_sigma.iter().all(|v| pos(*v))),
+            ("full_scale", self.full_scale.iter().all(|v| pos(*v))),
+            ("imu_period", pos(self.imu_period)),
+            ("learn_tau_s", pos(self.learn_tau_s)),
+            ("drift_tau_s", pos(self.drift_tau_s)),
+            ("aiding_timeout_s", pos(self.aiding_timeout_s)),
+            ("gravity", pos(self.gravity)),
+        ];
+        if let Some(&(field, _)) = positive.iter().find(|(_, ok)| !ok) {
+            return Err(ConfigError::NonPositive(field));
         }
         let delay_steps = self.aiding_delay_s / self.imu_period;
         if !delay_steps.finite()
@@ -220,6 +270,47 @@ impl<T: Real> UkfMonitorConfig<T> {
         }
         if !(self.alpha > 0.0 && self.alpha <= 0.5) {
             return Err(ConfigError::TTest);
+        }
+        // Checked when the filter is built as well; here so that `validate`
+        // alone answers for the whole configuration.
+        if SigmaWeights::<T, 13>::new(&self.sigma).is_none() {
+            return Err(ConfigError::SigmaParams);
+        }
+        let positive: [(&'static str, bool); 6] = [
+            ("gate_sigma", pos(self.gate_sigma)),
+            ("glr_threshold", pos(self.glr_threshold)),
+            ("min_fault", self.min_fault.iter().all(|v| pos(*v))),
+            ("threshold_fraction", pos(self.threshold_fraction)),
+            ("persistence", self.persistence > 0),
+            ("frozen_samples", self.frozen_samples > 0),
+        ];
+        if let Some(&(field, _)) = positive.iter().find(|(_, ok)| !ok) {
+            return Err(ConfigError::NonPositive(field));
+        }
+        let in_range: [(&'static str, bool); 8] = [
+            ("lever_arm", self.lever_arm.iter().all(|v| v.finite())),
+            (
+                "cos_pitch_min",
+                pos(self.cos_pitch_min) && self.cos_pitch_min < T::one(),
+            ),
+            ("outlier_k", non_neg(self.outlier_k)),
+            (
+                "glr_relative",
+                non_neg(self.glr_relative) && self.glr_relative <= T::one(),
+            ),
+            (
+                "sign_deadband",
+                non_neg(self.sign_deadband) && self.sign_deadband < T::one(),
+            ),
+            ("converge_s", non_neg(self.converge_s)),
+            ("learn_s", non_neg(self.learn_s)),
+            (
+                "drift_rate_limit",
+                self.drift_rate_limit.iter().all(|v| non_neg(*v)),
+            ),
+        ];
+        if let Some(&(field, _)) = in_range.iter().find(|(_, ok)| !ok) {
+            return Err(ConfigError::OutOfRange(field));
         }
         Ok(())
     }

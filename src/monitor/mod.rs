@@ -3,6 +3,7 @@
 
 mod align;
 mod config;
+mod input;
 mod otsukf_monitor;
 mod report;
 mod task;
@@ -12,5 +13,7 @@ pub use align::align_state;
 pub use config::{ConfigError, UkfMonitorConfig};
 pub use otsukf_monitor::{OtsReport, OtsukfConfig, OtsukfMonitor};
 pub use report::{ChannelState, Health, Phase, Report};
-pub use task::{Monitor, PeriodicMonitor, TaskReport, Verdict};
+#[allow(deprecated)] // the former name, kept for users
+pub use task::Monitor;
+pub use task::{MonitorTask, PeriodicMonitor, TaskReport, Verdict};
 pub use ukf_monitor::{UkfMonitor, DEFAULT_WINDOW, MAX_DELAY_STEPS};

@@ -5,6 +5,7 @@
 use nalgebra::Vector3;
 
 use super::align::align_state;
+use super::input::{check_period, in_range, lever_arm_rates, next_phase, usable_aiding, Period};
 use super::{ChannelState, ConfigError, Health, Phase, UkfMonitorConfig};
 use crate::filter::{Gate, TwoStageUkf, UkfError};
 use crate::math::Real;
@@ -95,29 +96,38 @@ impl<T: Real> OtsukfConfig<T> {
         }
     }
 
-    /// Checks the configuration.
+    /// Checks every field, the base configuration's included; the error
+    /// names the first offending field.
     pub fn validate(&self) -> Result<(), ConfigError> {
         self.base.validate()?;
-        let ok = self
-            .fault_psd
-            .iter()
-            .chain(self.fault_sigma0.iter())
-            .all(|v| v.finite() && *v > T::zero())
-            && self.k_on.finite()
-            && self.k_off.finite()
-            && self.k_off > T::zero()
-            && self.k_off <= self.k_on
-            && self.adapt_k.finite()
-            && self.adapt_k > T::zero()
-            && self.adapt_gain.iter().all(|g| g.finite() && *g >= T::one())
-            && self.adapt_hold_s.finite()
-            && self.adapt_hold_s >= T::zero()
-            && self.adapt_level.is_none_or(|l| l.finite() && l > T::zero());
-        if ok {
-            Ok(())
-        } else {
-            Err(ConfigError::NonPositive)
+        let pos = |v: T| v.finite() && v > T::zero();
+        let positive: [(&'static str, bool); 6] = [
+            ("fault_psd", self.fault_psd.iter().all(|v| pos(*v))),
+            ("fault_sigma0", self.fault_sigma0.iter().all(|v| pos(*v))),
+            ("k_on", pos(self.k_on)),
+            ("k_off", pos(self.k_off)),
+            ("adapt_k", pos(self.adapt_k)),
+            ("adapt_level", self.adapt_level.is_none_or(pos)),
+        ];
+        if let Some(&(field, _)) = positive.iter().find(|(_, ok)| !ok) {
+            return Err(ConfigError::NonPositive(field));
         }
+        let in_range: [(&'static str, bool); 3] = [
+            // Hysteresis: the clear threshold may not exceed the set one.
+            ("k_off", self.k_off <= self.k_on),
+            (
+                "adapt_gain",
+                self.adapt_gain.iter().all(|g| g.finite() && *g >= T::one()),
+            ),
+            (
+                "adapt_hold_s",
+                self.adapt_hold_s.finite() && self.adapt_hold_s >= T::zero(),
+            ),
+        ];
+        if let Some(&(field, _)) = in_range.iter().find(|(_, ok)| !ok) {
+            return Err(ConfigError::OutOfRange(field));
+        }
+        Ok(())
     }
 }
 
@@ -240,19 +250,14 @@ impl<T: Real> OtsukfMonitor<T> {
     pub fn step(&mut self, imu: &ImuVec<T>, dt: T, aiding: &Measurement<T>) -> OtsReport<T> {
         let b = self.cfg.base;
         let mut health = Health::default();
-        let in_range = imu
-            .iter()
-            .zip(b.full_scale.iter())
-            .all(|(v, fs)| v.finite() && v.abs() <= *fs * T::lit(1.5));
+        let in_range = in_range(imu, &b.full_scale);
         health.input_invalid = !in_range;
-        let dt_ok = dt.finite() && dt > T::zero() && dt <= b.imu_period * T::lit(5.0);
+        // Unlike the innovation monitor, a gap is not bridged with a capped
+        // period: the two-stage filter only predicts over normal periods.
+        let dt_ok = matches!(check_period(dt, b.imu_period), Period::Valid(_));
         health.dt_out_of_range = !dt_ok;
         let u_corr = imu - self.filter.fault();
-        let omega = if in_range {
-            u_corr.fixed_rows::<3>(3).into_owned()
-        } else {
-            Vector3::zeros()
-        };
+        let omega = lever_arm_rates(in_range, &u_corr);
         if self.phase == Phase::Aligning {
             self.try_align(aiding, &omega);
             return self.compose(imu, health, false);
@@ -267,10 +272,7 @@ impl<T: Real> OtsukfMonitor<T> {
         }
         let mut updated = false;
         if aiding.any() && !health.pitch_singular {
-            let mut available = aiding.available;
-            for (a, z) in available.iter_mut().zip(aiding.z.iter()) {
-                *a = *a && z.finite();
-            }
+            let available = usable_aiding(aiding);
             let x_pred = self.filter.state();
             let hjac = self.meas.jacobian(&x_pred, &omega);
             let r = b.meas_sigma.component_mul(&b.meas_sigma);
@@ -359,31 +361,31 @@ impl<T: Real> OtsukfMonitor<T> {
 
     fn advance_phase(&mut self) {
         let b = &self.cfg.base;
-        match self.phase {
-            Phase::Converging if self.phase_time >= b.converge_s => {
+        if self.phase == Phase::Learning {
+            // The nominal bias (SPEC §8a): what the filter attributes to
+            // the IMU once converged, averaged over the learning period
+            // because a single sample of f̂ carries its whole estimation
+            // noise into every later fault estimate. Running mean, so
+            // the f32 sum cannot swamp the increments.
+            self.learn_count += T::one();
+            let n = self.learn_count;
+            self.nominal += (self.filter.fault() - self.nominal) / n;
+        }
+        match next_phase(self.phase, self.phase_time, b.converge_s, b.learn_s) {
+            Some(Phase::Learning) => {
                 self.phase = Phase::Learning;
                 self.nominal = ImuVec::zeros();
                 self.learn_count = T::zero();
             }
-            Phase::Learning => {
-                // The nominal bias (SPEC §8a): what the filter attributes to
-                // the IMU once converged, averaged over the learning period
-                // because a single sample of f̂ carries its whole estimation
-                // noise into every later fault estimate. Running mean, so
-                // the f32 sum cannot swamp the increments.
-                self.learn_count += T::one();
-                let n = self.learn_count;
-                self.nominal += (self.filter.fault() - self.nominal) / n;
-                if self.phase_time >= b.converge_s + b.learn_s {
-                    // Capped like the innovation monitor's: anything larger
-                    // is a fault present from power-on.
-                    let cap = T::lit(20.0);
-                    self.nominal = self
-                        .nominal
-                        .zip_map(&b.min_fault, |f, m| f.max(-m * cap).min(m * cap));
-                    self.latched = [0; 6];
-                    self.phase = Phase::Monitoring;
-                }
+            Some(Phase::Monitoring) => {
+                // Capped like the innovation monitor's: anything larger
+                // is a fault present from power-on.
+                let cap = T::lit(20.0);
+                self.nominal = self
+                    .nominal
+                    .zip_map(&b.min_fault, |f, m| f.max(-m * cap).min(m * cap));
+                self.latched = [0; 6];
+                self.phase = Phase::Monitoring;
             }
             _ => {}
         }

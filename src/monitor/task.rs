@@ -80,11 +80,11 @@ impl PeriodicMonitor for OtsukfMonitor<f32> {
 }
 
 /// The monitor task: an IMU driver and one [`PeriodicMonitor`] — by
-/// default the UKF innovation monitor; [`Monitor::with_monitor`] runs any
+/// default the UKF innovation monitor; [`MonitorTask::with_monitor`] runs any
 /// other (e.g. the two-stage UKF, whose corrected sample removes the
 /// estimated fault continuously).
 #[derive(Debug)]
-pub struct Monitor<I, M = UkfMonitor<f32>> {
+pub struct MonitorTask<I, M = UkfMonitor<f32>> {
     imu: I,
     ukf: M,
     pending_dt: f32,
@@ -94,14 +94,21 @@ pub struct Monitor<I, M = UkfMonitor<f32>> {
     last_corrected: [f32; 6],
 }
 
-impl<I: Imu, const W: usize> Monitor<I, UkfMonitor<f32, W>> {
-    /// A task reading `imu` and running a UKF monitor configured by `cfg`.
+/// The task's former name.
+#[deprecated(note = "renamed `MonitorTask`: it is the periodic task that drives a monitor")]
+pub type Monitor<I, M = UkfMonitor<f32>> = MonitorTask<I, M>;
+
+impl<I: Imu> MonitorTask<I> {
+    /// A task reading `imu` and running a UKF monitor configured by `cfg`
+    /// (default window). One impl only, so `MonitorTask::new(imu, cfg)`
+    /// needs no type annotation; another window or monitor goes through
+    /// [`with_monitor`](Self::with_monitor).
     pub fn new(imu: I, cfg: UkfMonitorConfig<f32>) -> Result<Self, ConfigError> {
         Ok(Self::with_monitor(imu, UkfMonitor::new(cfg)?))
     }
 }
 
-impl<I: Imu, M: PeriodicMonitor> Monitor<I, M> {
+impl<I: Imu, M: PeriodicMonitor> MonitorTask<I, M> {
     /// A task reading `imu` and running `monitor`.
     pub fn with_monitor(imu: I, monitor: M) -> Self {
         Self {

@@ -1,10 +1,13 @@
 use nalgebra::Vector3;
 
 use super::align::align_state;
+use super::input::{
+    check_period, in_range, lever_arm_rates, next_phase, saturated, usable_aiding, Period,
+};
 use super::{ChannelState, ConfigError, Health, Phase, Report, UkfMonitorConfig};
 use crate::detect::{
-    decouple_flags, estimate_as_written, estimate_corrected, glr_isolate, paper_matrix,
-    runtime_sign_matrix, t_statistic, Detector, InnovationWindow, Persistence, Statistic, TTest,
+    estimate_as_written, estimate_corrected, paper_matrix, test_flags, window_evidence,
+    DecisionRule, Detector, InnovationWindow, Persistence, Statistic, TTest, WindowEvidence,
     PAPER_MATRIX_AS_PRINTED, PAPER_MATRIX_CORRECTED,
 };
 use crate::filter::{ChannelDiag, Gate, Ukf, UkfError};
@@ -162,22 +165,18 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let mut updated = false;
 
         // --- input checks -------------------------------------------------
-        let period = self.cfg.imu_period;
-        let dt_ok = dt.finite() && dt > T::zero();
-        let max_dt = period * T::lit(5.0);
-        let dt_use = if !dt_ok {
-            health.dt_out_of_range = true;
-            None
-        } else if dt > max_dt {
-            health.dt_out_of_range = true;
-            Some(max_dt)
-        } else {
-            Some(dt)
+        let dt_use = match check_period(dt, self.cfg.imu_period) {
+            Period::Valid(dt) => Some(dt),
+            Period::Long(max_dt) => {
+                health.dt_out_of_range = true;
+                Some(max_dt)
+            }
+            Period::Invalid => {
+                health.dt_out_of_range = true;
+                None
+            }
         };
-        let in_range = imu
-            .iter()
-            .zip(self.cfg.full_scale.iter())
-            .all(|(v, fs)| v.finite() && v.abs() <= *fs * T::lit(1.5));
+        let in_range = in_range(imu, &self.cfg.full_scale);
         health.input_invalid = !in_range;
         if in_range {
             if *imu == self.prev_imu {
@@ -188,11 +187,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             self.prev_imu = *imu;
         }
         health.frozen = self.frozen_count >= self.cfg.frozen_samples;
-        let saturated = in_range
-            && imu
-                .iter()
-                .zip(self.cfg.full_scale.iter())
-                .any(|(v, fs)| v.abs() >= *fs * T::lit(0.98));
+        let saturated = in_range && saturated(imu, &self.cfg.full_scale);
         if saturated {
             self.stats_holdoff = T::lit(0.5);
         }
@@ -205,12 +200,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
 
         // --- alignment ----------------------------------------------------
         if self.phase == Phase::Aligning {
-            // An invalid sample must not reach the state through the lever-arm term.
-            let omega = if in_range {
-                imu.fixed_rows::<3>(3).into_owned()
-            } else {
-                Vector3::zeros()
-            };
+            let omega = lever_arm_rates(in_range, imu);
             self.try_align(aiding, &omega);
             self.report = self.compose(imu, health, false);
             return self.report;
@@ -240,11 +230,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // --- measurement update --------------------------------------------
         let meas_ok = aiding.any();
         if meas_ok && !health.pitch_singular {
-            let omega: Vector3<T> = if in_range {
-                imu.fixed_rows::<3>(3) - self.nominal_bias.fixed_rows::<3>(3)
-            } else {
-                Vector3::zeros()
-            };
+            let omega = lever_arm_rates(in_range, &(imu - self.nominal_bias));
             match self.update(aiding, &omega) {
                 Ok((rejected, reset)) => {
                     updated = true;
@@ -314,10 +300,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let h = self.meas.jacobian(&x_prior, omega);
         let r = self.cfg.meas_sigma.component_mul(&self.cfg.meas_sigma);
         let meas = self.meas;
-        let mut available = aiding.available;
-        for (a, z) in available.iter_mut().zip(aiding.z.iter()) {
-            *a = *a && z.finite();
-        }
+        let available = usable_aiding(aiding);
         // With a known latency, predict the measurement from the state of its
         // time (the history holds one state per IMU step, newest last).
         let delayed = if self.delay_steps > 0 {
@@ -474,109 +457,29 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
 
     fn detect(&mut self, _health: &Health) {
         let threshold = self.t_threshold();
-        // Per innovation channel with a full window: (statistic, mean, variance of the mean).
-        let stats: [Option<(T, T, T)>; NZ] = core::array::from_fn(|i| {
-            let w = self.windows.get(i)?;
-            if !w.is_full() {
-                return None;
-            }
-            let s = if self.cfg.outlier_k > T::zero() {
-                w.stats_trimmed(self.cfg.outlier_k)?.0
-            } else {
-                w.stats()?
-            };
-            let n = T::lit(s.n as f64);
-            Some(match self.cfg.statistic {
-                Statistic::Normalized => (s.mean * n.sqrt_fast(), s.mean, T::one() / n),
-                _ => (t_statistic(&s), s.mean, s.std * s.std / n),
-            })
-        });
-        let full = stats.map(|s| s.is_some());
-        let tstat = stats.map(|s| s.map_or(T::zero(), |v| v.0));
-        let flags = tstat.map(|t| {
-            if t >= threshold {
-                1i8
-            } else if t <= -threshold {
-                -1
-            } else {
-                0
-            }
-        });
-        let rbar = ImuVec::from_iterator(stats.iter().map(|s| s.map_or(T::zero(), |v| v.1)));
-        let weight = ImuVec::from_iterator(stats.iter().map(|s| {
-            s.map_or(T::zero(), |v| {
-                if v.2 > T::zero() {
-                    T::one() / v.2
-                } else {
-                    T::zero()
-                }
-            })
-        }));
+        let WindowEvidence {
+            full,
+            tstat,
+            rbar,
+            weight,
+        } = window_evidence(&self.windows, self.cfg.statistic, self.cfg.outlier_k);
+        let flags = test_flags(&tstat, threshold);
         let scale = self.window_scale();
         let mut m_eff = self.signature;
         for (i, s) in scale.iter().enumerate() {
             let row = m_eff.row(i) * *s;
             m_eff.set_row(i, &row);
         }
-        let decision = match self.cfg.detector {
-            Detector::Threshold => {
-                let mut d = [0i8; NZ];
-                let diag = m_eff.diagonal();
-                for ((((dj, fl), r), mjj), mf) in d
-                    .iter_mut()
-                    .zip(flags.iter())
-                    .zip(rbar.iter())
-                    .zip(diag.iter())
-                    .zip(self.cfg.min_fault.iter())
-                {
-                    if *fl != 0 && *mjj != T::zero() {
-                        let f = *r / *mjj;
-                        if f.abs() > *mf * self.cfg.threshold_fraction {
-                            *dj = if f > T::zero() { 1 } else { -1 };
-                        }
-                    }
-                }
-                d
-            }
-            Detector::PaperMatrix | Detector::PaperMatrixAsPrinted => match self.paper_inv {
-                Some(ci) => decouple_flags(&ci, &flags).0,
-                None => [0; NZ],
-            },
-            Detector::RuntimeMatrix => {
-                let sigma = weight.map(|w| {
-                    if w > T::zero() {
-                        T::one() / w.sqrt_fast()
-                    } else {
-                        T::zero()
-                    }
-                });
-                let c = runtime_sign_matrix(
-                    &m_eff,
-                    &self.cfg.min_fault,
-                    &sigma,
-                    self.cfg.sign_deadband,
-                );
-                match c.try_inverse() {
-                    Some(ci) => decouple_flags(&ci, &flags).0,
-                    None => [0; NZ],
-                }
-            }
-            Detector::RuntimeMatrixGlr => {
-                if flags.iter().any(|f| *f != 0) {
-                    glr_isolate(
-                        &m_eff,
-                        &rbar,
-                        &weight,
-                        self.cfg.glr_threshold,
-                        self.cfg.glr_relative,
-                        3,
-                    )
-                    .signs
-                } else {
-                    [0; NZ]
-                }
-            }
+        let rule = DecisionRule {
+            detector: self.cfg.detector,
+            paper_inv: self.paper_inv.as_ref(),
+            min_fault: &self.cfg.min_fault,
+            threshold_fraction: self.cfg.threshold_fraction,
+            sign_deadband: self.cfg.sign_deadband,
+            glr_threshold: self.cfg.glr_threshold,
+            glr_relative: self.cfg.glr_relative,
         };
+        let decision = rule.decide(&m_eff, &flags, &rbar, &weight);
         let monitored = self.monitored(&full);
         let mut masked = decision;
         for (d, m) in masked.iter_mut().zip(monitored.iter()) {
@@ -630,12 +533,18 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     }
 
     fn advance_phase(&mut self) {
-        match self.phase {
-            Phase::Converging if self.phase_time >= self.cfg.converge_s => {
+        let next = next_phase(
+            self.phase,
+            self.phase_time,
+            self.cfg.converge_s,
+            self.cfg.learn_s,
+        );
+        match next {
+            Some(Phase::Learning) => {
                 self.phase = Phase::Learning;
                 self.learn_clock = self.phase_time;
             }
-            Phase::Learning if self.phase_time >= self.cfg.converge_s + self.cfg.learn_s => {
+            Some(Phase::Monitoring) => {
                 self.phase = Phase::Monitoring;
                 for w in self.windows.iter_mut() {
                     w.clear();

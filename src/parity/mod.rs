@@ -23,6 +23,7 @@ mod monitor;
 mod multiscale;
 mod space;
 mod training;
+mod validate;
 
 pub use geometry::{euler_rotation, yaw_rotation, Geometry};
 pub use health::{HealthConfig, Reading, SensorHealth, SensorStatus};
@@ -33,7 +34,8 @@ pub use multiscale::{MultiscaleConfig, MultiscaleDecision, REGRESSORS, SCALES};
 pub use space::ParitySpace;
 pub use training::{Baseline, Trainer};
 
-/// A redundant-array configuration that cannot work.
+/// A redundant-array configuration that cannot work. Its `Display` names
+/// the field.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ConfigError {
@@ -51,4 +53,7 @@ pub enum ConfigError {
     Probability,
     /// A field of [`MultiscaleConfig`] out of range (see its `check`).
     Multiscale,
+    /// This field is zero, negative, not finite or out of range (see
+    /// [`ParityConfig::validate`]).
+    Field(&'static str),
 }

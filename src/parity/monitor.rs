@@ -328,6 +328,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// fewer than four sensors, a window longer than `W` or zero, a bad
     /// false-alarm probability.
     pub fn new(geometry: &Geometry<T, N>, cfg: ParityConfig<T>) -> Result<Self, ConfigError> {
+        cfg.validate()?;
         if cfg.window_blocks == 0 || cfg.window_blocks > W || cfg.block_len == 0 {
             return Err(ConfigError::Window);
         }

@@ -13,7 +13,7 @@ pub fn chi_square_upper_tail(x: f64, nu: u32) -> f64 {
         return 1.0;
     }
     let half = 0.5 * x;
-    if nu % 2 == 0 {
+    if nu.is_multiple_of(2) {
         let mut term = 1.0;
         let mut sum = 1.0;
         for i in 1..nu / 2 {

@@ -1,0 +1,61 @@
+//! `imu-fdi-sim parity-realistic`: the parity monitor for real flights on
+//! the realistic simulated profile (fitted to log171).
+
+use anyhow::{bail, Result};
+
+use hal_sim::array::ArrayKind;
+use imu_fdi_cli::eval::parity_campaign::{fault_free, steps};
+
+// The arguments of `parity-realistic` (help on `Cmd::ParityRealistic`).
+#[derive(clap::Args)]
+pub(crate) struct Args {
+    /// gyro, accel or both.
+    #[arg(long, default_value = "both")]
+    kind: String,
+    /// Fault-free hours (one-hour flights, seeds 1000…).
+    #[arg(long, default_value_t = 10)]
+    hours: u32,
+    /// Rounds of steps per size (18 flights each: IMU × axis × sign).
+    #[arg(long, default_value_t = 2)]
+    rounds: u64,
+}
+
+/// Runs `parity-realistic`.
+pub(crate) fn run(a: Args) -> Result<()> {
+    let kinds: &[ArrayKind] = match a.kind.as_str() {
+        "gyro" => &[ArrayKind::Gyro],
+        "accel" => &[ArrayKind::Accel],
+        "both" => &[ArrayKind::Gyro, ArrayKind::Accel],
+        other => bail!("--kind: '{other}' is not gyro, accel or both"),
+    };
+    for &kind in kinds {
+        let ff = fault_free(kind, a.hours, 1000)?;
+        out!(
+            "{kind:?}: {:.2} h fault-free: {} alarm events ({:.2}/h), {} sensors isolated",
+            ff.hours,
+            ff.alarm_events,
+            ff.alarm_events as f64 / ff.hours.max(1e-9),
+            ff.isolations
+        );
+        let (unit, sizes): (&str, &[f64]) = match kind {
+            ArrayKind::Gyro => ("°/s", &[0.5, 1.0, 2.0, 3.0]),
+            ArrayKind::Accel => ("m/s²", &[0.1, 0.2, 0.3, 0.5]),
+        };
+        for &s in sizes {
+            let si = match kind {
+                ArrayKind::Gyro => s.to_radians(),
+                ArrayKind::Accel => s,
+            };
+            let r = steps(kind, si, a.rounds, 1)?;
+            let med = r.delays.get(r.delays.len() / 2).copied();
+            out!(
+                "  step {s} {unit}: {}/{} isolated within 10 s, {} flights with a false alarm, median delay {}",
+                r.isolated,
+                r.cases,
+                r.false_alarms,
+                med.map_or("-".into(), |d| format!("{d:.1} s"))
+            );
+        }
+    }
+    Ok(())
+}

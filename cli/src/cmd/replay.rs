@@ -1,0 +1,255 @@
+//! `imu-fdi-sim replay`: Replay a SPEC §10 CSV through the monitor (default detector: run-time matrix + GLR).
+
+use std::path::PathBuf;
+
+use anyhow::{anyhow, Result};
+use clap::ValueEnum;
+use hal_sim::runner::monitor_config;
+use hal_sim::Scenario;
+use imu_fdi::model::AidingKind;
+use imu_fdi::monitor::UkfMonitorConfig;
+
+use super::{options, DetectOpts};
+
+// The arguments of `replay` (its help text is the doc comment on `Cmd::Replay`
+// in main.rs, where the subcommands are listed).
+#[derive(clap::Args)]
+pub(crate) struct Args {
+    /// Input CSV.
+    input: PathBuf,
+    /// Per-row output CSV.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// JSON summary.
+    #[arg(long)]
+    summary: Option<PathBuf>,
+    /// With truth columns: seconds after a fault during which flags are not false alarms (2·L).
+    #[arg(long, default_value_t = 4.4)]
+    grace: f64,
+    /// With a CSV extract: its GNSS velocity file (see `convert`).
+    #[arg(long)]
+    gnss: Option<PathBuf>,
+    /// With a CSV extract: its attitude file (see `convert`).
+    #[arg(long)]
+    att: Option<PathBuf>,
+    /// Ignore rows before this time, s (start the monitor in flight).
+    #[arg(long)]
+    from: Option<f64>,
+    /// Ignore rows after this time, s.
+    #[arg(long)]
+    to: Option<f64>,
+    /// Fault table (TOML: `[sizes]` and `[[faults]]`, or a scenario file) to
+    /// inject on top of the recorded IMU.
+    #[arg(long)]
+    faults: Option<PathBuf>,
+    /// Added to the fault table's times (a scenario's table starts near 0 s).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    fault_offset: f64,
+    /// IMU instance the faults go on.
+    #[arg(long, default_value_t = 0)]
+    inject_imu: usize,
+    /// Seed of injected noise (NoiseIncrease).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Tuning: sim (the S2/S3 scenarios'), flight (real logs: wide aiding
+    /// noise, IMU noise measured on the log), auto (sim if the file has
+    /// truth columns, else flight).
+    #[arg(long, value_enum, default_value_t = ProfileArg::Auto)]
+    profile: ProfileArg,
+    /// Learning phase, s (flight default 20).
+    #[arg(long)]
+    learn: Option<f64>,
+    /// Flight profile: aiding velocity σ, m/s.
+    #[arg(long, default_value_t = 0.3)]
+    vel_sigma: f64,
+    /// Flight profile: attitude σ in degrees, one value or roll,pitch,yaw
+    /// (an autopilot's own estimate is not independent of the IMU: keep it wide).
+    #[arg(long, value_delimiter = ',', default_value = "1,1,10")]
+    att_sigma_deg: Vec<f64>,
+    #[command(flatten)]
+    detect: DetectOpts,
+}
+
+/// Runs `replay`.
+pub(crate) fn run(args: Args) -> Result<()> {
+    let Args {
+        input,
+        out,
+        summary,
+        grace,
+        gnss,
+        att,
+        from,
+        to,
+        faults,
+        fault_offset,
+        inject_imu,
+        seed,
+        profile,
+        learn,
+        vel_sigma,
+        att_sigma_deg,
+        detect,
+    } = args;
+    let ropts = options("replay", &detect);
+    let sim_cfg = |kind: AidingKind| {
+        let scn = match kind {
+            AidingKind::DvlCompass => Scenario::s2(),
+            AidingKind::GnssAttitude => Scenario::s3(),
+        };
+        let mut c: UkfMonitorConfig<f64> = monitor_config(&scn, &ropts);
+        c.detector = ropts.detector;
+        c
+    };
+    let deg = std::f64::consts::PI / 180.0;
+    let att_sigma = match att_sigma_deg.as_slice() {
+        [a] => [a * deg, a * deg, a * deg],
+        [r, p, y] => [r * deg, p * deg, y * deg],
+        _ => {
+            return Err(anyhow!(
+                "--att-sigma-deg takes one value or three (roll,pitch,yaw)"
+            ))
+        }
+    };
+    let inject = match faults {
+        Some(f) => Some((
+            imu_fdi_cli::eval::inject::FaultTable::read(&f)?.shifted(fault_offset),
+            inject_imu,
+        )),
+        None => None,
+    };
+    let opts = imu_fdi_cli::eval::replay::ReplayOptions {
+        grace_s: grace,
+        from_s: from,
+        to_s: to,
+        inject,
+        seed,
+        profile: profile.into(),
+        learn_s: learn,
+        vel_sigma,
+        att_sigma,
+    };
+    // A flight log is converted to the SPEC §10 CSV first.
+    let is_log = input
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("ulg") || e.eq_ignore_ascii_case("bin"))
+        || gnss.is_some()
+        || att.is_some()
+        || !has_time_column(&input);
+    let original = input.clone();
+    let input = if is_log {
+        let csv = std::env::temp_dir().join(format!(
+            "imu-fdi-{}-{}.csv",
+            std::process::id(),
+            input.file_stem().and_then(|s| s.to_str()).unwrap_or("log")
+        ));
+        let c = imu_fdi_cli::io::log_import::any_to_replay_csv(
+            &input,
+            gnss.as_deref(),
+            att.as_deref(),
+            &csv,
+        )?;
+        out!(
+                "converted {}: {} rows of {} IMU(s) at {:.1} Hz, {} with GNSS velocity, {} with attitude",
+                input.display(),
+                c.rows,
+                c.imu_instances,
+                c.imu_rate_hz,
+                c.gnss_rows,
+                c.att_rows
+            );
+        if let Some(why) = &c.ended_early {
+            out!("warning: the log parser stopped early ({why}); only the part before it was converted");
+        }
+        csv
+    } else {
+        input
+    };
+    let result = imu_fdi_cli::eval::replay::replay(
+        &input,
+        out.as_deref(),
+        summary.as_deref(),
+        sim_cfg,
+        &opts,
+    );
+    if is_log {
+        // The converted CSV was only an intermediate (`convert` keeps one).
+        let _ = std::fs::remove_file(&input);
+    }
+    let s = result.map_err(|e| {
+        if is_log {
+            anyhow!("{} (after conversion): {e:#}", original.display())
+        } else {
+            e
+        }
+    })?;
+    out!(
+            "replayed {} rows ({} skipped, {} IMU rows rejected) of {} IMU(s) at {:.1} Hz, t = {:.2}..{:.2} s; aiding {}, profile {}, monitoring from {:?} s ({} samples)",
+            s.rows,
+            s.skipped_rows,
+            s.rejected_imu_rows,
+            s.imus,
+            s.imu_rate_hz,
+            s.span_s.0,
+            s.span_s.1,
+            s.aiding,
+            s.profile,
+            s.monitoring_from_s,
+            s.monitored_samples
+        );
+    for c in &s.channels {
+        let scored = match (c.fault_samples, c.correct_samples, c.false_alarm_samples) {
+            (Some(f), Some(ok), Some(fa)) => format!(
+                "; fault samples {f}, correct {ok}, first correct {:?} s, false-alarm samples {fa}",
+                c.first_correct_s
+            ),
+            _ => String::new(),
+        };
+        let common = if s.imus >= 2 {
+            format!(
+                " ({} on every IMU at once: aiding/model)",
+                c.common_mode_samples
+            )
+        } else {
+            String::new()
+        };
+        out!(
+            "  {:<8} flagged {:>6} samples{common}, first at {:?} s{scored}",
+            c.channel,
+            c.flagged_samples,
+            c.first_detection_s
+        );
+    }
+    if let Some(p) = out {
+        out!("wrote {}", p.display());
+    }
+    if let Some(p) = summary {
+        out!("wrote {}", p.display());
+    }
+    Ok(())
+}
+
+/// Replay tuning profile.
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum ProfileArg {
+    Sim,
+    Flight,
+    Auto,
+}
+
+impl From<ProfileArg> for imu_fdi_cli::eval::replay::Profile {
+    fn from(p: ProfileArg) -> Self {
+        match p {
+            ProfileArg::Sim => Self::Sim,
+            ProfileArg::Flight => Self::Flight,
+            ProfileArg::Auto => Self::Auto,
+        }
+    }
+}
+
+/// True when `path` reads as a CSV whose header has the SPEC §10 `t`
+/// column (or cannot be read: `replay` then reports it); false for a CSV
+/// extract that `convert` maps.
+pub(crate) fn has_time_column(path: &std::path::Path) -> bool {
+    imu_fdi_cli::io::log_import::open_csv(path).map_or(true, |(_, h)| h.iter().any(|c| c == "t"))
+}

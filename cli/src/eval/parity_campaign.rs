@@ -1,0 +1,166 @@
+//! The parity monitor for real flights on the realistic simulated profile
+//! ([`hal_sim::realistic`], fitted to log171): fault-free hours for the
+//! false-alarm rate, and steps of a given size on every IMU and axis for
+//! the detection rate, so the figures a user reads are not white-noise
+//! figures (issue 14).
+
+use anyhow::{anyhow, Result};
+use nalgebra::Matrix3;
+use rayon::prelude::*;
+
+use imu_fdi::parity::{Geometry, ParityConfig, ParityMonitor, ParityPhase};
+
+use hal_sim::array::ArrayKind;
+use hal_sim::realistic::{ChannelFault, RealisticArray, RealisticProfile};
+
+/// Seconds of flight the monitor trains on.
+pub const TRAIN_S: f64 = 30.0;
+/// Seconds within which a step must be isolated.
+pub const ISOLATE_WITHIN_S: f64 = 10.0;
+
+/// What a fault-free realistic flight produced.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FaultFree {
+    /// Monitored hours.
+    pub hours: f64,
+    /// Alarm events (rising edges of the fault flag).
+    pub alarm_events: usize,
+    /// Sensors isolated (all healthy here).
+    pub isolations: usize,
+}
+
+/// What the steps of one size produced.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Steps {
+    /// Cases run (IMU × axis × sign × seed).
+    pub cases: usize,
+    /// Isolated to the right sensor within [`ISOLATE_WITHIN_S`], no other
+    /// alarm in the flight.
+    pub isolated: usize,
+    /// Cases with an alarm outside the fault or a healthy sensor isolated.
+    pub false_alarms: usize,
+    /// Delays of the isolations, s (sorted).
+    pub delays: Vec<f64>,
+}
+
+fn config(kind: ArrayKind, rate: f64) -> ParityConfig<f32> {
+    match kind {
+        ArrayKind::Gyro => ParityConfig::gyro_flight(rate, 2000f32.to_radians()),
+        ArrayKind::Accel => ParityConfig::accel_flight(rate, 16.0 * imu_fdi::model::G0 as f32),
+    }
+}
+
+/// Alarm start times, isolations `(sensor, t)` and monitored seconds of
+/// one flight.
+type Flight = (Vec<f64>, Vec<(usize, f64)>, f64);
+
+/// One flight through the monitor: alarm starts after monitoring began,
+/// isolations `(sensor, t)`, monitored seconds.
+fn run(
+    kind: ArrayKind,
+    profile: &RealisticProfile,
+    seed: u64,
+    fault: Option<ChannelFault>,
+) -> Result<Flight> {
+    let geometry = Geometry::<f32, 9>::triads(&[Matrix3::identity(); 3])
+        .map_err(|e| anyhow!("array geometry: {e:?}"))?;
+    let mut cfg = config(kind, profile.log_hz);
+    cfg.train_samples = (TRAIN_S * profile.log_hz).round() as u32;
+    let mut monitor = ParityMonitor::<f32, 9, 40>::new(&geometry, cfg)
+        .map_err(|e| anyhow!("parity configuration: {e:?}"))?;
+    let mut sim = RealisticArray::new(profile, seed);
+    if let Some(f) = fault {
+        sim = sim.with_fault(f);
+    }
+    let (mut alarms, mut isolations) = (Vec::new(), Vec::new());
+    let (mut was, mut from, mut last) = (false, None, 0.0);
+    for row in sim {
+        let readings = row.readings(kind).map(|r| r.map(|v| v as f32));
+        let r = monitor.step(&readings);
+        last = row.t;
+        if from.is_none() && r.phase == ParityPhase::Monitoring {
+            from = Some(row.t);
+        }
+        if from.is_some() && r.fault && !was {
+            alarms.push(row.t);
+        }
+        was = r.fault;
+        if let Some(k) = r.isolated {
+            isolations.push((k, row.t));
+        }
+    }
+    Ok((alarms, isolations, from.map_or(0.0, |f| last - f)))
+}
+
+/// `hours` of fault-free realistic flight, split into one-hour flights
+/// (seeds `seed..`), run on every core.
+pub fn fault_free(kind: ArrayKind, hours: u32, seed: u64) -> Result<FaultFree> {
+    let profile = RealisticProfile::log171().with_duration(3600.0 + TRAIN_S);
+    let runs: Vec<_> = (0..u64::from(hours))
+        .into_par_iter()
+        .map(|i| run(kind, &profile, seed + i, None))
+        .collect::<Result<_>>()?;
+    Ok(runs
+        .iter()
+        .fold(FaultFree::default(), |acc, (a, iso, s)| FaultFree {
+            hours: acc.hours + s / 3600.0,
+            alarm_events: acc.alarm_events + a.len(),
+            isolations: acc.isolations + iso.len(),
+        }))
+}
+
+/// Steps of `size` (rad/s or m/s²) lasting 15 s on every IMU × axis × sign
+/// of `kind`, `seeds` rounds of them, one 100-s realistic flight per case
+/// (onset 60 s, in the loiter/acro cycle), each with its own seed from
+/// `seed` on.
+pub fn steps(kind: ArrayKind, size: f64, seeds: u64, seed: u64) -> Result<Steps> {
+    let profile = RealisticProfile::log171().with_duration(100.0);
+    let channel0 = match kind {
+        ArrayKind::Gyro => 3,
+        ArrayKind::Accel => 0,
+    };
+    let onset = 60.0;
+    // Every case flies its own seed: the same flight under every step
+    // would count one early false alarm eighteen times.
+    let mut jobs = Vec::new();
+    for s in 0..seeds {
+        for imu in 0..3 {
+            for axis in 0..3 {
+                for sign in [1.0, -1.0] {
+                    let case = jobs.len() as u64;
+                    jobs.push((seed + case, imu, axis, sign));
+                }
+            }
+        }
+        let _ = s;
+    }
+    let results: Vec<_> = jobs
+        .par_iter()
+        .map(|&(sd, imu, axis, sign)| {
+            let fault = ChannelFault::bias(imu, channel0 + axis, onset, onset + 15.0, sign * size);
+            let (alarms, iso, _) = run(kind, &profile, sd, Some(fault))?;
+            let sensor = 3 * imu + axis;
+            let hit = iso
+                .iter()
+                .find(|(k, t)| *k == sensor && *t >= onset && *t < onset + ISOLATE_WITHIN_S)
+                .map(|(_, t)| t - onset);
+            let wrong = iso.iter().any(|(k, _)| *k != sensor);
+            let outside = alarms.iter().any(|t| *t < onset || *t > onset + 15.0);
+            Ok((hit, wrong || outside))
+        })
+        .collect::<Result<_>>()?;
+    let mut out = Steps {
+        cases: results.len(),
+        ..Steps::default()
+    };
+    for (hit, fa) in results {
+        if fa {
+            out.false_alarms += 1;
+        } else if let Some(d) = hit {
+            out.isolated += 1;
+            out.delays.push(d);
+        }
+    }
+    out.delays.sort_by(f64::total_cmp);
+    Ok(out)
+}

@@ -1,0 +1,781 @@
+//! Replays logs of several synchronous IMUs (SPEC §10 columns
+//! `imu{k}_{ax,ay,az,gx,gy,gz}`) through the parity monitor and the
+//! autopilot baselines, optionally with a bias injected on one IMU channel.
+
+use std::path::Path;
+
+use anyhow::{bail, Context, Result};
+use nalgebra::Matrix3;
+
+use imu_fdi::parity::{Geometry, ParityConfig, ParityMonitor, Reading, SensorStatus};
+
+use hal_sim::array::ArrayKind;
+use hal_sim::baseline::{ArduPilotLike, Px4Like};
+
+const AXES: [&str; 6] = ["ax", "ay", "az", "gx", "gy", "gz"];
+/// Most IMUs a replayed log may carry.
+pub const MAX_IMUS: usize = 3;
+
+/// The IMU rows of a log.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ImuLog {
+    /// Time of each row, s (strictly increasing).
+    pub t: Vec<f64>,
+    /// Per row, per IMU: `[a_x, a_y, a_z, p, q, r]` (NaN where a cell was empty).
+    pub imus: Vec<Vec<[f64; 6]>>,
+    /// Number of IMUs found.
+    pub count: usize,
+    /// Rows skipped because their time did not increase.
+    pub skipped: usize,
+}
+
+/// Reads a SPEC §10 CSV with `imu{k}_…` columns (k = 0, 1, …). Errors name
+/// the file and line; rows with non-increasing `t` are skipped and counted.
+pub fn read_imu_log(path: &Path) -> Result<ImuLog> {
+    let (mut rdr, headers) = crate::io::log_import::open_csv(path)?;
+    let find = |name: &str| headers.iter().position(|h| h == name);
+    let t_col = find("t").with_context(|| format!("{}: no `t` column", path.display()))?;
+    let mut cols: Vec<[usize; 6]> = Vec::new();
+    for k in 0..MAX_IMUS {
+        let idx: Vec<Option<usize>> = AXES.iter().map(|a| find(&format!("imu{k}_{a}"))).collect();
+        match idx.iter().copied().collect::<Option<Vec<usize>>>() {
+            Some(v) => cols.push([v[0], v[1], v[2], v[3], v[4], v[5]]),
+            None if idx.iter().any(Option::is_some) => bail!(
+                "{}: imu{k} has only some of imu{k}_ax … imu{k}_gz",
+                path.display()
+            ),
+            None => break,
+        }
+    }
+    if cols.len() < 2 {
+        bail!(
+            "{}: needs at least two IMUs (imu0_… and imu1_… columns)",
+            path.display()
+        );
+    }
+    let mut log = ImuLog {
+        count: cols.len(),
+        ..ImuLog::default()
+    };
+    for (line, rec) in rdr.records().enumerate() {
+        let rec = rec.with_context(|| format!("{}: line {}", path.display(), line + 2))?;
+        let parse = |i: usize| -> Result<f64> {
+            let cell = rec.get(i).unwrap_or("");
+            if cell.is_empty() {
+                return Ok(f64::NAN);
+            }
+            cell.parse::<f64>().with_context(|| {
+                format!(
+                    "{}: line {}: '{cell}' is not a number",
+                    path.display(),
+                    line + 2
+                )
+            })
+        };
+        let t = parse(t_col)?;
+        if !t.is_finite() || log.t.last().is_some_and(|last| t <= *last) {
+            log.skipped += 1;
+            continue;
+        }
+        let mut row = Vec::with_capacity(cols.len());
+        for c in &cols {
+            let mut v = [0.0; 6];
+            for (slot, i) in v.iter_mut().zip(c.iter()) {
+                *slot = parse(*i)?;
+            }
+            row.push(v);
+        }
+        log.t.push(t);
+        log.imus.push(row);
+    }
+    if log.t.len() < 10 {
+        bail!("{}: fewer than 10 usable rows", path.display());
+    }
+    Ok(log)
+}
+
+/// A bias added to one IMU channel from a time on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Injection {
+    /// IMU index.
+    pub imu: usize,
+    /// Channel 0–5 `[a_x … r]`.
+    pub channel: usize,
+    /// Bias (m/s² or rad/s).
+    pub size: f64,
+    /// Onset, s (log time).
+    pub start: f64,
+    /// End (exclusive), s; `f64::INFINITY` for a bias that stays.
+    pub end: f64,
+}
+
+/// What one replay produced for one sensor kind.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ParityReplay {
+    /// Log time training ended (monitoring began).
+    pub monitoring_from: Option<f64>,
+    /// Threshold factors `[GLT, PCA, CUSUM]` set by calibration.
+    pub threshold_scales: [f64; 3],
+    /// Training's correlation factor (block variance ÷ white-noise value).
+    pub correlation_factor: f64,
+    /// Alarm intervals of the monitor's decision (GLT or CUSUM):
+    /// (start, end, suspect sensor at the start).
+    pub alarms: Vec<(f64, f64, Option<usize>)>,
+    /// Isolations (sensor = 3·imu + axis, time).
+    pub isolations: Vec<(usize, f64)>,
+    /// First time each (sensor, non-healthy status) was seen.
+    pub statuses: Vec<(usize, SensorStatus, f64)>,
+    /// Common-mode saturation intervals (start, end, –).
+    pub saturation: Vec<(f64, f64, Option<usize>)>,
+    /// PX4-like alarm intervals (start, end, IMU blamed).
+    pub px4: Vec<(f64, f64, Option<usize>)>,
+    /// ArduPilot-like alarm intervals.
+    pub ardupilot: Vec<(f64, f64, Option<usize>)>,
+}
+
+fn edge(
+    list: &mut Vec<(f64, f64, Option<usize>)>,
+    on: bool,
+    was: &mut bool,
+    t: f64,
+    who: Option<usize>,
+) {
+    if on && !*was {
+        list.push((t, t, who));
+    }
+    if on {
+        if let Some(last) = list.last_mut() {
+            last.1 = t;
+        }
+    }
+    *was = on;
+}
+
+/// Replays `log` for gyros or accelerometers (three IMUs, board rotation
+/// already applied: aligned triads) from `train_start`, training for
+/// `train_s` seconds, with an optional injected bias.
+pub fn replay_parity(
+    log: &ImuLog,
+    kind: ArrayKind,
+    train_start: f64,
+    train_s: f64,
+    injection: Option<Injection>,
+) -> Result<ParityReplay> {
+    replay_parity_with(
+        log,
+        kind,
+        train_start,
+        train_s,
+        injection,
+        ParityMethod::Flight,
+    )
+}
+
+/// Which parity tests a replay runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ParityMethod {
+    /// [`ParityConfig::gyro_flight`]/[`ParityConfig::accel_flight`]: in-flight
+    /// relative calibration and multi-scale tests with learned covariances.
+    #[default]
+    Flight,
+    /// The simulator's defaults ([`ParityConfig::gyro`]): windowed χ² or
+    /// CUSUM on 0.1 s blocks with calibrated thresholds (white-noise model).
+    GltCusum,
+}
+
+/// [`replay_parity`] with a chosen method.
+pub fn replay_parity_with(
+    log: &ImuLog,
+    kind: ArrayKind,
+    train_start: f64,
+    train_s: f64,
+    injection: Option<Injection>,
+    method: ParityMethod,
+) -> Result<ParityReplay> {
+    if log.count != 3 {
+        bail!(
+            "the parity replay needs three IMUs, the log has {}",
+            log.count
+        );
+    }
+    let span = log.t.last().copied().unwrap_or(0.0) - log.t.first().copied().unwrap_or(0.0);
+    let rate = (log.t.len().saturating_sub(1)) as f64 / span.max(1e-9);
+    let (offset, fs) = match kind {
+        ArrayKind::Gyro => (3, 2000.0_f64.to_radians()),
+        ArrayKind::Accel => (0, 16.0 * imu_fdi::model::G0),
+    };
+    let cfg = match (kind, method) {
+        (ArrayKind::Gyro, ParityMethod::Flight) => {
+            let mut c = ParityConfig::<f32>::gyro_flight(rate, fs as f32);
+            c.train_samples = (train_s * rate).round() as u32;
+            c
+        }
+        (ArrayKind::Accel, ParityMethod::Flight) => {
+            let mut c = ParityConfig::<f32>::accel_flight(rate, fs as f32);
+            c.train_samples = (train_s * rate).round() as u32;
+            c
+        }
+        (ArrayKind::Gyro, ParityMethod::GltCusum) => {
+            let mut c = ParityConfig::<f32>::gyro(rate, fs as f32);
+            // Two thirds train, one third calibrates the thresholds.
+            c.train_samples = (train_s * rate * 2.0 / 3.0).round() as u32;
+            c.calibrate_samples = (train_s * rate / 3.0).round() as u32;
+            c
+        }
+        (ArrayKind::Accel, ParityMethod::GltCusum) => {
+            let mut c = ParityConfig::<f32>::accel(rate, fs as f32);
+            c.train_samples = (train_s * rate * 2.0 / 3.0).round() as u32;
+            c.calibrate_samples = (train_s * rate / 3.0).round() as u32;
+            c
+        }
+    };
+    let geometry = Geometry::<f32, 9>::triads(&[Matrix3::identity(); 3])
+        .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    let mut monitor =
+        ParityMonitor::<f32, 9, 40>::new(&geometry, cfg).map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    let mut px4 = Px4Like::<3>::new(kind == ArrayKind::Gyro);
+    let mut ap = ArduPilotLike::new(kind == ArrayKind::Gyro);
+    let mut out = ParityReplay::default();
+    let (mut was, mut was_sat, mut was_px4, mut was_ap) = (false, false, false, false);
+    let mut prev_t = None;
+    for (t, row) in log.t.iter().zip(log.imus.iter()) {
+        if *t < train_start {
+            continue;
+        }
+        let value = |imu: usize, axis: usize| -> f64 {
+            let ch = offset + axis;
+            let mut v = row
+                .get(imu)
+                .and_then(|r| r.get(ch))
+                .copied()
+                .unwrap_or(f64::NAN);
+            if let Some(inj) = injection {
+                if inj.imu == imu && inj.channel == ch && *t >= inj.start && *t < inj.end {
+                    v += inj.size;
+                }
+            }
+            v
+        };
+        let readings: [Reading<f32>; 9] = core::array::from_fn(|i| {
+            let v = value(i / 3, i % 3);
+            if v.is_nan() {
+                Reading::Missing
+            } else {
+                Reading::Sample(v as f32)
+            }
+        });
+        let r = monitor.step(&readings);
+        if out.monitoring_from.is_none() && r.phase == imu_fdi::parity::ParityPhase::Monitoring {
+            out.monitoring_from = Some(*t);
+        }
+        for (k, st) in r.status.iter().enumerate() {
+            if *st != SensorStatus::Healthy
+                && !out.statuses.iter().any(|(j, s, _)| *j == k && s == st)
+            {
+                out.statuses.push((k, *st, *t));
+            }
+        }
+        if let Some(k) = r.isolated {
+            out.isolations.push((k, *t));
+        }
+        if out.monitoring_from.is_some() {
+            edge(&mut out.alarms, r.fault, &mut was, *t, r.suspect);
+        }
+        edge(
+            &mut out.saturation,
+            r.common_mode_saturation,
+            &mut was_sat,
+            *t,
+            None,
+        );
+        // Baselines on the IMU vectors.
+        let units: [[f64; 3]; 3] = core::array::from_fn(|k| core::array::from_fn(|a| value(k, a)));
+        let mean: [f64; 3] =
+            core::array::from_fn(|a| units.iter().map(|u| u[a]).sum::<f64>() / 3.0);
+        let dev: [[f64; 3]; 3] =
+            core::array::from_fn(|k| core::array::from_fn(|a| units[k][a] - mean[a]));
+        let diff: Vec<[f64; 3]> = units
+            .iter()
+            .map(|u| core::array::from_fn(|a| u[a] - units[0][a]))
+            .collect();
+        let dt = prev_t.map_or(1.0 / rate, |p| t - p);
+        prev_t = Some(*t);
+        let blame = px4.step(&dev, dt);
+        edge(&mut out.px4, blame.is_some(), &mut was_px4, *t, blame);
+        let alarm = ap.step(&diff, *t);
+        edge(&mut out.ardupilot, alarm, &mut was_ap, *t, None);
+    }
+    out.threshold_scales = monitor.threshold_scales().map(f64::from);
+    out.correlation_factor = monitor
+        .baseline()
+        .map_or(1.0, |b| f64::from(b.correlation_factor));
+    Ok(out)
+}
+
+/// Seconds after onset within which an injected bias counts as detected.
+pub const DETECT_WITHIN_S: f64 = 15.0;
+
+/// Smallest injected bias detected on one channel, per method.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InjectionResult {
+    /// IMU index.
+    pub imu: usize,
+    /// Axis 0–2 of the swept kind.
+    pub axis: usize,
+    /// Onset, s.
+    pub onset: f64,
+    /// Parity monitor: (size, delay s, isolated to the right sensor).
+    pub parity: Option<(f64, f64, bool)>,
+    /// PX4-like: (size, delay s).
+    pub px4: Option<(f64, f64)>,
+    /// ArduPilot-like: (size, delay s).
+    pub ardupilot: Option<(f64, f64)>,
+}
+
+/// For every IMU channel of `kind` and each onset, the smallest of `sizes`
+/// (ascending) that each method flags within [`DETECT_WITHIN_S`] with no
+/// alarm between monitoring start and onset.
+pub fn injection_sweep(
+    log: &ImuLog,
+    kind: ArrayKind,
+    train_start: f64,
+    train_s: f64,
+    onsets: &[f64],
+    sizes: &[f64],
+) -> Result<Vec<InjectionResult>> {
+    let channel0 = match kind {
+        ArrayKind::Gyro => 3,
+        ArrayKind::Accel => 0,
+    };
+    let mut out = Vec::new();
+    for imu in 0..3 {
+        for axis in 0..3 {
+            for &onset in onsets {
+                let mut res = InjectionResult {
+                    imu,
+                    axis,
+                    onset,
+                    parity: None,
+                    px4: None,
+                    ardupilot: None,
+                };
+                for &size in sizes {
+                    let inj = Injection {
+                        imu,
+                        channel: channel0 + axis,
+                        size,
+                        start: onset,
+                        end: f64::INFINITY,
+                    };
+                    let r = replay_parity(log, kind, train_start, train_s, Some(inj))?;
+                    let first = |list: &[(f64, f64, Option<usize>)]| {
+                        if list.iter().any(|a| a.0 < onset) {
+                            return None;
+                        }
+                        list.iter()
+                            .find(|a| a.0 < onset + DETECT_WITHIN_S)
+                            .map(|a| a.0 - onset)
+                    };
+                    if res.parity.is_none() {
+                        if let Some(d) = first(&r.alarms) {
+                            let ok = r.isolations.first().is_some_and(|(k, t)| {
+                                *k == 3 * imu + axis && *t < onset + DETECT_WITHIN_S
+                            });
+                            res.parity = Some((size, d, ok));
+                        }
+                    }
+                    if res.px4.is_none() {
+                        res.px4 = first(&r.px4).map(|d| (size, d));
+                    }
+                    if res.ardupilot.is_none() {
+                        res.ardupilot = first(&r.ardupilot).map(|d| (size, d));
+                    }
+                    if res.parity.is_some() && res.px4.is_some() && res.ardupilot.is_some() {
+                        break;
+                    }
+                }
+                out.push(res);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Bias grid for [`injection_sweep`]: gyro 0.5–30 °/s (rad/s), accel
+/// 0.05–5 m/s².
+pub fn injection_sizes(kind: ArrayKind) -> Vec<f64> {
+    match kind {
+        ArrayKind::Gyro => [0.5, 1.0, 1.5, 2.0, 3.0, 5.0, 7.0, 10.0, 15.0, 20.0, 30.0]
+            .iter()
+            .map(|d: &f64| d.to_radians())
+            .collect(),
+        ArrayKind::Accel => vec![0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 5.0],
+    }
+}
+
+/// Reads the IMU instances of an ArduPilot DataFlash `.bin` log (messages
+/// `IMU`, `IMU2`, `IMU3`, or `IMU` with an instance field `I`), with the
+/// `ardupilot-binlog` parser. Rows are the timestamps at which every
+/// instance logged a sample (ArduPilot logs them synchronously). A log that
+/// ends mid-message (truncated, or power lost) is read up to that point;
+/// the number of such errors is returned in [`ImuLog::skipped`].
+pub fn read_dataflash(path: &Path) -> Result<ImuLog> {
+    let log = read_dataflash_imus(path)?;
+    if log.count < 2 {
+        bail!(
+            "{}: fewer than two IMU instances (IMU, IMU2, IMU3) in the log",
+            path.display()
+        );
+    }
+    Ok(log)
+}
+
+/// Reads every IMU instance of a DataFlash log (one or more), keeping the
+/// rows where all instances share a timestamp.
+pub fn read_dataflash_imus(path: &Path) -> Result<ImuLog> {
+    use std::collections::BTreeMap;
+    let file = ardupilot_binlog::File::open(path)
+        .with_context(|| format!("cannot read {}", path.display()))?;
+    let entries = file
+        .entries()
+        .with_context(|| format!("{}: not a DataFlash log", path.display()))?;
+    let mut by_time: BTreeMap<u64, [Option<[f64; 6]>; MAX_IMUS]> = BTreeMap::new();
+    let mut errors = 0usize;
+    let mut instances = 0usize;
+    for e in entries {
+        let e = match e {
+            Ok(e) => e,
+            Err(_) => {
+                // A corrupt or truncated tail: keep what was read.
+                errors += 1;
+                break;
+            }
+        };
+        let inst = match e.name.as_str() {
+            "IMU" => e.get_u64("I").map_or(0, |i| i as usize),
+            "IMU2" => 1,
+            "IMU3" => 2,
+            _ => continue,
+        };
+        if inst >= MAX_IMUS {
+            continue;
+        }
+        let t_us = e
+            .get_u64("TimeUS")
+            .or_else(|| e.get_u64("TimeMS").map(|ms| ms * 1000))
+            .or(e.timestamp_usec);
+        let Some(t_us) = t_us else { continue };
+        let v = |k: &str| e.get_f64(k).unwrap_or(f64::NAN);
+        let sample = [
+            v("AccX"),
+            v("AccY"),
+            v("AccZ"),
+            v("GyrX"),
+            v("GyrY"),
+            v("GyrZ"),
+        ];
+        instances = instances.max(inst + 1);
+        if let Some(slot) = by_time.entry(t_us).or_default().get_mut(inst) {
+            *slot = Some(sample);
+        }
+    }
+    if instances == 0 {
+        bail!("{}: no IMU messages in the log", path.display());
+    }
+    let mut log = ImuLog {
+        count: instances,
+        skipped: errors,
+        ..ImuLog::default()
+    };
+    for (t_us, row) in by_time {
+        let Some(all) = row
+            .iter()
+            .take(instances)
+            .copied()
+            .collect::<Option<Vec<_>>>()
+        else {
+            continue;
+        };
+        log.t.push(t_us as f64 * 1e-6);
+        log.imus.push(all);
+    }
+    if log.t.len() < 10 {
+        bail!("{}: fewer than 10 synchronous IMU rows", path.display());
+    }
+    Ok(log)
+}
+
+/// Reads a multi-IMU log by its extension: `.csv` (SPEC §10 columns) or
+/// `.bin` (ArduPilot DataFlash). Anything else is an error naming the file.
+pub fn read_any_imu_log(path: &Path) -> Result<ImuLog> {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("csv") => read_imu_log(path),
+        Some("bin") => read_dataflash(path),
+        _ => bail!(
+            "{}: unknown file type (expected .csv in the SPEC §10 format or an ArduPilot DataFlash .bin)",
+            path.display()
+        ),
+    }
+}
+
+/// One case of the step table: a bias on one IMU channel for a while.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepCase {
+    /// Training start, s.
+    pub train_start: f64,
+    /// The injected step.
+    pub injection: Injection,
+    /// Isolated to the right sensor within [`STEP_ISOLATE_WITHIN_S`] of onset.
+    pub isolated: bool,
+    /// Seconds from onset to that isolation.
+    pub delay: Option<f64>,
+    /// An alarm started outside the fault window (between monitoring start
+    /// and `end_s`), or a healthy sensor was isolated.
+    pub false_alarm: bool,
+}
+
+/// Seconds after onset within which the step must be isolated.
+pub const STEP_ISOLATE_WITHIN_S: f64 = 10.0;
+
+/// The log171 step table for one sensor kind and step size: for every
+/// training start, every IMU × axis × sign and every onset, a step lasting
+/// `duration_s` is replayed; a case passes when the right sensor is
+/// isolated within [`STEP_ISOLATE_WITHIN_S`] and nothing alarms outside
+/// `[onset, onset + duration_s]` before `end_s` (the crash). Onsets are
+/// seconds after the monitoring start of each training start.
+#[allow(clippy::too_many_arguments)]
+pub fn step_table(
+    log: &ImuLog,
+    kind: ArrayKind,
+    size: f64,
+    train_starts: &[f64],
+    train_s: f64,
+    onsets_after_start: &[f64],
+    duration_s: f64,
+    end_s: f64,
+) -> Result<Vec<StepCase>> {
+    let channel0 = match kind {
+        ArrayKind::Gyro => 3,
+        ArrayKind::Accel => 0,
+    };
+    let mut jobs = Vec::new();
+    for &ts in train_starts {
+        for &after in onsets_after_start {
+            for imu in 0..3 {
+                for axis in 0..3 {
+                    for sign in [1.0, -1.0] {
+                        jobs.push((ts, after, imu, axis, sign));
+                    }
+                }
+            }
+        }
+    }
+    use rayon::prelude::*;
+    jobs.par_iter()
+        .map(|&(ts, after, imu, axis, sign)| {
+            let start = ts + train_s + after;
+            let injection = Injection {
+                imu,
+                channel: channel0 + axis,
+                size: sign * size,
+                start,
+                end: start + duration_s,
+            };
+            let r = replay_parity(log, kind, ts, train_s, Some(injection))?;
+            let sensor = 3 * imu + axis;
+            let from = r.monitoring_from.unwrap_or(f64::INFINITY);
+            let first = r
+                .isolations
+                .iter()
+                .find(|(_, t)| *t >= start && *t < start + STEP_ISOLATE_WITHIN_S);
+            let isolated = first.is_some_and(|(k, _)| *k == sensor);
+            let wrong_isolation = r.isolations.iter().any(|(k, t)| *k != sensor && *t < end_s);
+            let outside = r
+                .alarms
+                .iter()
+                .any(|a| a.0 >= from && a.0 < end_s && (a.0 < start || a.0 > start + duration_s));
+            Ok(StepCase {
+                train_start: ts,
+                injection,
+                isolated,
+                delay: first.filter(|_| isolated).map(|(_, t)| t - start),
+                false_alarm: wrong_isolation || outside,
+            })
+        })
+        .collect()
+}
+
+/// A bias present on one IMU channel from the first row of the log.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PowerUpCase {
+    /// Training start, s.
+    pub train_start: f64,
+    /// The injected bias (start −∞, end +∞).
+    pub injection: Injection,
+    /// Seconds from monitoring start to the isolation of the right sensor,
+    /// when that came within [`STEP_ISOLATE_WITHIN_S`].
+    pub delay: Option<f64>,
+    /// A healthy sensor was isolated before the crash.
+    pub wrong_isolation: bool,
+}
+
+/// For every training start, IMU, axis and sign: a bias of `size` on that
+/// channel for the whole log. The case passes when the sensor is isolated
+/// within [`STEP_ISOLATE_WITHIN_S`] of monitoring start and no healthy
+/// sensor is isolated before `end_s`.
+pub fn power_up_table(
+    log: &ImuLog,
+    kind: ArrayKind,
+    size: f64,
+    train_starts: &[f64],
+    train_s: f64,
+    end_s: f64,
+) -> Result<Vec<PowerUpCase>> {
+    let channel0 = match kind {
+        ArrayKind::Gyro => 3,
+        ArrayKind::Accel => 0,
+    };
+    let mut jobs = Vec::new();
+    for &ts in train_starts {
+        for imu in 0..3 {
+            for axis in 0..3 {
+                for sign in [1.0, -1.0] {
+                    jobs.push((ts, imu, axis, sign));
+                }
+            }
+        }
+    }
+    use rayon::prelude::*;
+    jobs.par_iter()
+        .map(|&(ts, imu, axis, sign)| {
+            let injection = Injection {
+                imu,
+                channel: channel0 + axis,
+                size: sign * size,
+                start: f64::NEG_INFINITY,
+                end: f64::INFINITY,
+            };
+            let r = replay_parity(log, kind, ts, train_s, Some(injection))?;
+            let sensor = 3 * imu + axis;
+            let from = r.monitoring_from.unwrap_or(f64::INFINITY);
+            let delay = r
+                .isolations
+                .iter()
+                .find(|(k, t)| *k == sensor && *t < from + STEP_ISOLATE_WITHIN_S)
+                .map(|(_, t)| (t - from).max(0.0));
+            let wrong_isolation = r.isolations.iter().any(|(k, t)| *k != sensor && *t < end_s);
+            Ok(PowerUpCase {
+                train_start: ts,
+                injection,
+                delay,
+                wrong_isolation,
+            })
+        })
+        .collect()
+}
+
+/// The replay of both sensor kinds as one JSON object (the schema of
+/// `imu-fdi-sim parity-replay --json`): `{"gyro": {"monitoring_from_s",
+/// "alarms": [{"start_s", "end_s", "sensor"}], "isolations": [{"sensor",
+/// "t_s"}], "statuses": [{"sensor", "status", "t_s"}]}, "accel": {…}}`,
+/// sensor = 3 × IMU + axis, times in seconds of the file's clock, `null`
+/// where a value does not exist (no monitoring, no suspect).
+pub fn replay_json(
+    log: &ImuLog,
+    train_start: f64,
+    train_s: f64,
+    method: ParityMethod,
+    injection: Option<Injection>,
+) -> Result<serde_json::Value> {
+    let mut out = serde_json::Map::new();
+    for (name, kind) in [("gyro", ArrayKind::Gyro), ("accel", ArrayKind::Accel)] {
+        let inj = injection.filter(|i| match kind {
+            ArrayKind::Gyro => i.channel >= 3,
+            ArrayKind::Accel => i.channel < 3,
+        });
+        let r = replay_parity_with(log, kind, train_start, train_s, inj, method)?;
+        let alarms: Vec<_> = r
+            .alarms
+            .iter()
+            .map(|(a, b, k)| serde_json::json!({"start_s": a, "end_s": b, "sensor": k}))
+            .collect();
+        let isolations: Vec<_> = r
+            .isolations
+            .iter()
+            .map(|(k, t)| serde_json::json!({"sensor": k, "t_s": t}))
+            .collect();
+        let statuses: Vec<_> = r
+            .statuses
+            .iter()
+            .map(|(k, s, t)| {
+                serde_json::json!({"sensor": k, "status": format!("{s:?}").to_lowercase(), "t_s": t})
+            })
+            .collect();
+        out.insert(
+            name.into(),
+            serde_json::json!({
+                "monitoring_from_s": r.monitoring_from,
+                "alarms": alarms,
+                "isolations": isolations,
+                "statuses": statuses,
+            }),
+        );
+    }
+    Ok(serde_json::Value::Object(out))
+}
+
+/// The step table as text (what `imu-fdi-sim parity-table` prints): pass
+/// counts per IMU × axis, false alarms, and the delays.
+pub fn format_step_table(kind: ArrayKind, size: f64, cases: &[StepCase], end_s: f64) -> String {
+    use std::fmt::Write;
+    let (unit, scale) = match kind {
+        ArrayKind::Gyro => ("°/s", 180.0 / std::f64::consts::PI),
+        ArrayKind::Accel => ("m/s²", 1.0),
+    };
+    let cases: Vec<_> = cases
+        .iter()
+        .filter(|c| c.injection.start + STEP_ISOLATE_WITHIN_S < end_s)
+        .collect();
+    let pass = |c: &StepCase| c.isolated && !c.false_alarm;
+    let ok = cases.iter().filter(|c| pass(c)).count();
+    let fa = cases.iter().filter(|c| c.false_alarm).count();
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{kind:?} step {:.3} {unit}: {ok}/{} isolated to the right sensor within {STEP_ISOLATE_WITHIN_S} s with no other alarm; {fa} cases with a false alarm",
+        size * scale,
+        cases.len()
+    );
+    let _ = writeln!(s, "  {:>5} {:>9} {:>9} {:>9}", "", "x", "y", "z");
+    for imu in 0..3 {
+        let cells: Vec<String> = (0..3)
+            .map(|axis| {
+                let sel: Vec<_> = cases
+                    .iter()
+                    .filter(|c| c.injection.imu == imu && c.injection.channel % 3 == axis)
+                    .collect();
+                format!("{}/{}", sel.iter().filter(|c| pass(c)).count(), sel.len())
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "  imu{imu} {:>9} {:>9} {:>9}",
+            cells[0], cells[1], cells[2]
+        );
+    }
+    let mut d: Vec<f64> = cases.iter().filter_map(|c| c.delay).collect();
+    d.sort_by(f64::total_cmp);
+    if let (Some(first), Some(last)) = (d.first(), d.last()) {
+        let _ = writeln!(
+            s,
+            "  isolation delay: median {:.1} s, range {first:.1}-{last:.1} s",
+            d.get(d.len() / 2).copied().unwrap_or(f64::NAN)
+        );
+    }
+    s
+}

@@ -1,0 +1,568 @@
+//! SPEC §10 replay: CSV in (IMU + aiding, optional truth), CSV and JSON out.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use anyhow::{bail, Context, Result};
+use imu_fdi::model::{AidingKind, ImuVec, MeasVec, Measurement, CHANNEL_NAMES};
+use imu_fdi::monitor::{Phase, UkfMonitor, UkfMonitorConfig};
+
+use hal_sim::scenario::Scenario;
+use hal_sim::sim::Simulator;
+
+const IMU_COLS: [&str; 6] = [
+    "imu0_ax", "imu0_ay", "imu0_az", "imu0_gx", "imu0_gy", "imu0_gz",
+];
+const DVL_COLS: [&str; 3] = ["dvl_u", "dvl_v", "dvl_w"];
+const GNSS_COLS: [&str; 3] = ["gnss_vn", "gnss_ve", "gnss_vd"];
+const ATT_COLS: [&str; 3] = ["att_roll", "att_pitch", "att_yaw"];
+
+/// Per-channel summary of a replay.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct ChannelSummary {
+    /// Channel name.
+    pub channel: String,
+    /// Samples flagged while monitoring (either sign).
+    pub flagged_samples: usize,
+    /// Time of the first flag, s.
+    pub first_detection_s: Option<f64>,
+    /// With truth columns: fault-active monitored samples.
+    pub fault_samples: Option<usize>,
+    /// With truth: of those, flagged with the right sign.
+    pub correct_samples: Option<usize>,
+    /// Of the flagged samples, those where every IMU of the file flagged
+    /// this channel at once: the aiding or the model, not this IMU (files
+    /// with two or more IMUs only).
+    pub common_mode_samples: usize,
+    /// With truth: fault-free monitored samples flagged.
+    pub false_alarm_samples: Option<usize>,
+    /// With truth: time of the first flag with the right sign during a fault, s.
+    pub first_correct_s: Option<f64>,
+}
+
+/// What a replay did.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct ReplaySummary {
+    /// Input rows read.
+    pub rows: usize,
+    /// Rows skipped (non-increasing or missing time, unparsable values).
+    pub skipped_rows: usize,
+    /// Rows whose IMU sample the monitor rejected (NaN, out of range).
+    pub rejected_imu_rows: usize,
+    /// Aiding model detected from the columns.
+    pub aiding: String,
+    /// Tuning profile used (`Sim` or `Flight`).
+    pub profile: String,
+    /// IMU instances monitored.
+    pub imus: usize,
+    /// Median IMU rate of the rows replayed, Hz.
+    pub imu_rate_hz: f64,
+    /// First and last time replayed, s.
+    pub span_s: (f64, f64),
+    /// IMU 0's process-noise PSD `[a_x … r]` ((m/s²)²/Hz, (rad/s)²/Hz).
+    pub process_noise_psd: Vec<f64>,
+    /// Measurement σ `[v×3 (m/s), roll, pitch, yaw (rad)]`.
+    pub meas_sigma: Vec<f64>,
+    /// Time monitoring started, s.
+    pub monitoring_from_s: Option<f64>,
+    /// Rows IMU 0's monitor spent monitoring.
+    pub monitored_samples: usize,
+    /// Per channel.
+    pub channels: Vec<ChannelSummary>,
+}
+
+fn parse_opt(rec: &csv::StringRecord, idx: Option<usize>) -> Option<f64> {
+    let s = rec.get(idx?)?.trim();
+    if s.is_empty() {
+        return None;
+    }
+    s.parse::<f64>().ok()
+}
+
+/// How the monitor is tuned for a replay.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Profile {
+    /// The built-in scenarios' tuning (S2 for DVL aiding, S3 for GNSS):
+    /// for simulated runs written by `simulate`.
+    Sim,
+    /// A real flight: aiding noise widened for an autopilot's own attitude
+    /// estimate and consumer GNSS, IMU noise measured on the log.
+    Flight,
+    /// `Sim` when the file has truth columns (`fault_imu0_*`), else `Flight`.
+    Auto,
+}
+
+/// Options of [`replay`] beyond the files.
+#[derive(Debug, Clone)]
+pub struct ReplayOptions {
+    /// With truth: seconds after a fault during which flags count neither as
+    /// false alarms nor as detections (the window is flushing).
+    pub grace_s: f64,
+    /// Rows before this time are ignored (start the monitor in flight).
+    pub from_s: Option<f64>,
+    /// Rows after this time are ignored.
+    pub to_s: Option<f64>,
+    /// Faults to inject, and the IMU instance they go on.
+    pub inject: Option<(crate::eval::inject::FaultTable, usize)>,
+    /// Seed of injected noise.
+    pub seed: u64,
+    /// Tuning.
+    pub profile: Profile,
+    /// Learning phase, s (None: the profile's).
+    pub learn_s: Option<f64>,
+    /// Flight profile: GNSS (or DVL) velocity σ, m/s.
+    pub vel_sigma: f64,
+    /// Flight profile: attitude σ (roll, pitch, yaw), rad.
+    pub att_sigma: [f64; 3],
+}
+
+impl Default for ReplayOptions {
+    fn default() -> Self {
+        let deg = core::f64::consts::PI / 180.0;
+        Self {
+            grace_s: 4.4,
+            from_s: None,
+            to_s: None,
+            inject: None,
+            seed: 1,
+            profile: Profile::Auto,
+            learn_s: None,
+            vel_sigma: 0.3,
+            att_sigma: [1.0 * deg, 1.0 * deg, 10.0 * deg],
+        }
+    }
+}
+
+/// One input row.
+struct Row {
+    t: f64,
+    imus: Vec<[f64; 6]>,
+    z: [f64; 6],
+    avail: [bool; 6],
+    /// Per IMU: the fault truth, if the file (or the injection) has it.
+    truth: Vec<Option<[f64; 6]>>,
+}
+
+fn imu_cols(k: usize) -> [String; 6] {
+    ["ax", "ay", "az", "gx", "gy", "gz"].map(|c| format!("imu{k}_{c}"))
+}
+
+fn channel_name(k: usize, c: &str) -> String {
+    if k == 0 {
+        c.to_string()
+    } else {
+        format!("imu{k}_{c}")
+    }
+}
+
+/// The monitor tuning of the `Flight` profile: `base` (its detector and
+/// test settings are kept) with the aiding noise of `opts`, period `dt` and
+/// the process noise measured on IMU samples `imu` (rows within the learning
+/// span).
+pub fn flight_config(
+    mut c: UkfMonitorConfig<f64>,
+    dt: f64,
+    imu: &[[f64; 6]],
+    opts: &ReplayOptions,
+) -> UkfMonitorConfig<f64> {
+    let [r, p, y] = opts.att_sigma;
+    c.meas_sigma = MeasVec::new(opts.vel_sigma, opts.vel_sigma, opts.vel_sigma, r, p, y);
+    // Vibration dominates a flying vehicle's IMU noise; measure it, with a
+    // floor at the datasheet-class default (a bench log reads ~0).
+    let sigma = crate::eval::inject::difference_sigma(imu);
+    for (i, s) in sigma.iter().enumerate() {
+        if let Some(q) = c.process_noise.psd.get_mut(i) {
+            *q = q.max(s * s * dt);
+        }
+    }
+    c.imu_period = dt;
+    c.learn_s = opts.learn_s.unwrap_or(20.0);
+    c
+}
+
+/// Replays `input` (SPEC §10 CSV; every `imu{k}_…` triad gets its own
+/// monitor) and writes `out` / `summary`. `sim_cfg` gives the `Sim` profile's
+/// tuning for an aiding kind.
+pub fn replay(
+    input: &Path,
+    out: Option<&Path>,
+    summary: Option<&Path>,
+    sim_cfg: impl Fn(AidingKind) -> UkfMonitorConfig<f64>,
+    opts: &ReplayOptions,
+) -> Result<ReplaySummary> {
+    let (mut rdr, headers) = crate::io::log_import::open_csv(input)?;
+    let col: HashMap<&str, usize> = headers.iter().enumerate().map(|(i, h)| (h, i)).collect();
+    let find = |name: &str| col.get(name).copied();
+    let t_idx = find("t").with_context(|| format!("{}: missing column 't'", input.display()))?;
+    let imu_idx: Vec<Vec<usize>> = (0..)
+        .map_while(|k| {
+            imu_cols(k)
+                .iter()
+                .map(|c| find(c))
+                .collect::<Option<Vec<_>>>()
+        })
+        .collect();
+    if imu_idx.is_empty() {
+        let missing = IMU_COLS
+            .iter()
+            .find(|c| find(c).is_none())
+            .unwrap_or(&"imu0_ax");
+        bail!("{}: missing column '{missing}'", input.display());
+    }
+    let has_dvl = DVL_COLS.iter().any(|c| find(c).is_some());
+    let has_gnss = GNSS_COLS.iter().any(|c| find(c).is_some());
+    let (kind, vel_cols) = match (has_dvl, has_gnss) {
+        (true, false) | (false, false) => (AidingKind::DvlCompass, DVL_COLS),
+        (false, true) => (AidingKind::GnssAttitude, GNSS_COLS),
+        (true, true) => bail!(
+            "{}: both dvl_* and gnss_* columns; give one aiding source",
+            input.display()
+        ),
+    };
+    let vel_idx: Vec<Option<usize>> = vel_cols.iter().map(|c| find(c)).collect();
+    let att_idx: Vec<Option<usize>> = ATT_COLS.iter().map(|c| find(c)).collect();
+    let truth_idx: Vec<Option<Vec<usize>>> = (0..imu_idx.len())
+        .map(|k| {
+            CHANNEL_NAMES
+                .iter()
+                .map(|c| find(&format!("fault_imu{k}_{c}")))
+                .collect::<Option<Vec<_>>>()
+        })
+        .collect();
+    let file_truth = truth_idx.iter().any(Option::is_some);
+
+    let mut sum = ReplaySummary {
+        aiding: format!("{kind:?}"),
+        ..Default::default()
+    };
+    // --- read ---------------------------------------------------------------
+    let mut rows: Vec<Row> = Vec::new();
+    let mut last_t: Option<f64> = None;
+    for (line, rec) in rdr.records().enumerate() {
+        let rec =
+            rec.with_context(|| format!("{}: bad CSV at line {}", input.display(), line + 2))?;
+        sum.rows += 1;
+        let Some(t) = parse_opt(&rec, Some(t_idx)).filter(|t| t.is_finite()) else {
+            sum.skipped_rows += 1;
+            continue;
+        };
+        if last_t.is_some_and(|lt| t <= lt) {
+            sum.skipped_rows += 1;
+            continue;
+        }
+        last_t = Some(t);
+        if opts.from_s.is_some_and(|f| t < f) || opts.to_s.is_some_and(|e| t > e) {
+            continue;
+        }
+        let imus = imu_idx
+            .iter()
+            .map(|idx| {
+                core::array::from_fn(|i| parse_opt(&rec, idx.get(i).copied()).unwrap_or(f64::NAN))
+            })
+            .collect();
+        let mut z = [0.0; 6];
+        let mut avail = [false; 6];
+        for (i, idx) in vel_idx.iter().chain(att_idx.iter()).enumerate() {
+            if let (Some(v), Some(zi), Some(ai)) =
+                (parse_opt(&rec, *idx), z.get_mut(i), avail.get_mut(i))
+            {
+                *zi = v;
+                *ai = true;
+            }
+        }
+        let truth = truth_idx
+            .iter()
+            .map(|idx| {
+                idx.as_ref().map(|idx| {
+                    core::array::from_fn(|i| parse_opt(&rec, idx.get(i).copied()).unwrap_or(0.0))
+                })
+            })
+            .collect();
+        rows.push(Row {
+            t,
+            imus,
+            z,
+            avail,
+            truth,
+        });
+    }
+    if rows.len() < 10 {
+        bail!(
+            "{}: fewer than 10 usable rows{}",
+            input.display(),
+            opts.from_s
+                .map_or(String::new(), |f| format!(" after {f} s"))
+        );
+    }
+    if !rows.iter().any(|r| r.avail.iter().any(|a| *a)) {
+        bail!(
+            "{}: no aiding in the file (every dvl_*, gnss_* and att_* cell empty or absent): \
+             the UKF monitor needs a velocity or attitude reference to compare the IMU with; \
+             redundant IMUs without one go to `parity-replay`",
+            input.display()
+        );
+    }
+    // The monitor's period is the log's median step, not an assumption.
+    let mut dts: Vec<f64> = rows.windows(2).map(|w| w[1].t - w[0].t).collect();
+    dts.sort_by(f64::total_cmp);
+    let dt = dts.get(dts.len() / 2).copied().unwrap_or(0.01);
+    sum.imu_rate_hz = 1.0 / dt;
+
+    // --- inject -------------------------------------------------------------
+    if let Some((table, k)) = &opts.inject {
+        if *k >= imu_idx.len() {
+            bail!(
+                "{}: cannot inject on IMU {k}: the file has {} IMU(s)",
+                input.display(),
+                imu_idx.len()
+            );
+        }
+        let sigma =
+            crate::eval::inject::difference_sigma(rows.iter().filter_map(|r| r.imus.get(*k)));
+        let mut inj = crate::eval::inject::Injector::new(table.clone(), sigma, opts.seed);
+        for r in &mut rows {
+            if let Some(s) = r.imus.get_mut(*k) {
+                let tr = inj.apply(r.t, s);
+                if let Some(slot) = r.truth.get_mut(*k) {
+                    *slot = Some(tr);
+                }
+            }
+        }
+    }
+
+    // --- configure ------------------------------------------------------------
+    let profile = match opts.profile {
+        Profile::Auto if file_truth => Profile::Sim,
+        Profile::Auto => Profile::Flight,
+        p => p,
+    };
+    sum.profile = format!("{profile:?}");
+    let mut monitors = Vec::new();
+    for k in 0..imu_idx.len() {
+        let mut cfg = match profile {
+            Profile::Flight => {
+                let probe = sim_cfg(kind);
+                let t0 = rows.first().map_or(0.0, |r| r.t);
+                let span = probe.converge_s + opts.learn_s.unwrap_or(20.0);
+                let learn: Vec<[f64; 6]> = rows
+                    .iter()
+                    .take_while(|r| r.t < t0 + span)
+                    .filter_map(|r| r.imus.get(k).copied())
+                    .collect();
+                flight_config(probe, dt, &learn, opts)
+            }
+            _ => {
+                let mut c = sim_cfg(kind);
+                c.imu_period = dt;
+                if let Some(l) = opts.learn_s {
+                    c.learn_s = l;
+                }
+                c
+            }
+        };
+        cfg.aiding = kind;
+        if k == 0 {
+            sum.process_noise_psd = cfg.process_noise.psd.iter().copied().collect();
+            sum.meas_sigma = cfg.meas_sigma.iter().copied().collect();
+        }
+        monitors.push(
+            UkfMonitor::<f64>::new(cfg)
+                .map_err(|e| anyhow::anyhow!("invalid monitor configuration: {e:?}"))?,
+        );
+    }
+    let has_truth: Vec<bool> = (0..imu_idx.len())
+        .map(|k| {
+            rows.iter()
+                .any(|r| r.truth.get(k).is_some_and(Option::is_some))
+        })
+        .collect();
+    sum.channels = (0..imu_idx.len())
+        .flat_map(|k| {
+            let ht = has_truth.get(k).copied().unwrap_or(false);
+            CHANNEL_NAMES.iter().map(move |c| ChannelSummary {
+                channel: channel_name(k, c),
+                fault_samples: ht.then_some(0),
+                correct_samples: ht.then_some(0),
+                false_alarm_samples: ht.then_some(0),
+                ..Default::default()
+            })
+        })
+        .collect();
+
+    // --- run ------------------------------------------------------------------
+    let mut writer = match out {
+        Some(p) => Some(
+            csv::Writer::from_path(p).with_context(|| format!("cannot write {}", p.display()))?,
+        ),
+        None => None,
+    };
+    if let Some(w) = writer.as_mut() {
+        let mut h = vec!["t".to_string()];
+        for s in ["x_u", "x_v", "x_w", "x_roll", "x_pitch", "x_yaw"] {
+            h.push(s.into());
+        }
+        for k in 0..imu_idx.len() {
+            for c in CHANNEL_NAMES {
+                h.push(channel_name(k, &format!("flag_{c}")));
+            }
+            for c in CHANNEL_NAMES {
+                h.push(channel_name(k, &format!("fhat_{c}")));
+            }
+        }
+        w.write_record(&h)?;
+    }
+    let mut last_fault_t = vec![f64::NEG_INFINITY; imu_idx.len()];
+    let mut prev_t: Option<f64> = None;
+    for row in &rows {
+        let t = row.t;
+        let step_dt = prev_t.map_or(dt, |p| t - p);
+        prev_t = Some(t);
+        let meas = Measurement {
+            z: MeasVec::from_iterator(row.z.iter().copied()),
+            available: row.avail,
+        };
+        let mut record = vec![format!("{t}")];
+        let mut cells = Vec::new();
+        let reports: Vec<_> = monitors
+            .iter_mut()
+            .enumerate()
+            .map(|(k, m)| {
+                let imu = ImuVec::from_iterator(row.imus.get(k).copied().unwrap_or([f64::NAN; 6]));
+                m.step(&imu, step_dt, &meas)
+            })
+            .collect();
+        let raised = |r: &imu_fdi::monitor::Report<f64>, i: usize| {
+            r.phase == Phase::Monitoring
+                && r.status
+                    .get(i)
+                    .and_then(|s| s.sign())
+                    .is_some_and(|f| f != 0)
+        };
+        // The same channel flagged on every IMU at once is the aiding or the
+        // model, not an IMU (SPEC §8b: gate and attribute).
+        let common: [bool; 6] =
+            core::array::from_fn(|i| reports.len() >= 2 && reports.iter().all(|r| raised(r, i)));
+        for (k, (r, lf)) in reports.iter().zip(last_fault_t.iter_mut()).enumerate() {
+            if k == 0 {
+                if r.health.input_invalid {
+                    sum.rejected_imu_rows += 1;
+                }
+                if r.phase == Phase::Monitoring {
+                    sum.monitoring_from_s.get_or_insert(t);
+                    sum.monitored_samples += 1;
+                }
+                record.extend(r.state.iter().map(|v| format!("{v}")));
+            }
+            let truth = row.truth.get(k).copied().flatten();
+            let any_fault = truth.is_some_and(|tr| tr.iter().any(|v| *v != 0.0));
+            if any_fault {
+                *lf = t;
+            }
+            let in_grace = !any_fault && t - *lf < opts.grace_s;
+            for (i, ch) in sum.channels.iter_mut().skip(6 * k).take(6).enumerate() {
+                let flag = r.status.get(i).and_then(|s| s.sign());
+                let flagged = flag.is_some_and(|f| f != 0);
+                if flagged && r.phase == Phase::Monitoring {
+                    ch.flagged_samples += 1;
+                    ch.first_detection_s.get_or_insert(t);
+                    if common.get(i).copied().unwrap_or(false) {
+                        ch.common_mode_samples += 1;
+                    }
+                }
+                if let (Some(tr), Some(f)) = (truth, flag) {
+                    let fv = tr.get(i).copied().unwrap_or(0.0);
+                    if fv != 0.0 {
+                        *ch.fault_samples.get_or_insert(0) += 1;
+                        // NaN: a hardware fault, of no sign.
+                        let correct = if fv.is_nan() {
+                            f != 0
+                        } else {
+                            f == if fv > 0.0 { 1 } else { -1 }
+                        };
+                        *ch.correct_samples.get_or_insert(0) += usize::from(correct);
+                        if correct {
+                            ch.first_correct_s.get_or_insert(t);
+                        }
+                    } else if !any_fault && !in_grace && flagged {
+                        *ch.false_alarm_samples.get_or_insert(0) += 1;
+                    }
+                }
+            }
+            cells.push((r.status, r.fault_estimate));
+        }
+        if let Some(w) = writer.as_mut() {
+            for (status, fhat) in &cells {
+                record.extend(
+                    status
+                        .iter()
+                        .map(|s| s.sign().map_or(String::new(), |v| v.to_string())),
+                );
+                record.extend(fhat.iter().map(|v| format!("{v}")));
+            }
+            w.write_record(&record)?;
+        }
+    }
+    if let Some(mut w) = writer {
+        w.flush()?;
+    }
+    sum.imus = imu_idx.len();
+    sum.span_s = (
+        rows.first().map_or(0.0, |r| r.t),
+        rows.last().map_or(0.0, |r| r.t),
+    );
+    if let Some(p) = summary {
+        std::fs::write(p, serde_json::to_string_pretty(&sum)?)
+            .with_context(|| format!("cannot write {}", p.display()))?;
+    }
+    Ok(sum)
+}
+
+/// Writes a simulated run in the SPEC §10 input format, with truth columns
+/// (`fault_imu0_*`, `truth_*`) that `replay` scores against.
+pub fn write_simulated(scn: &Scenario, seed: u64, path: &Path) -> Result<u64> {
+    let mut w =
+        csv::Writer::from_path(path).with_context(|| format!("cannot write {}", path.display()))?;
+    let vel = match scn.aiding.kind {
+        AidingKind::DvlCompass => DVL_COLS,
+        AidingKind::GnssAttitude => GNSS_COLS,
+    };
+    let mut h: Vec<String> = vec!["t".into()];
+    h.extend(IMU_COLS.iter().map(|s| s.to_string()));
+    h.extend(vel.iter().map(|s| s.to_string()));
+    h.extend(ATT_COLS.iter().map(|s| s.to_string()));
+    h.extend(CHANNEL_NAMES.iter().map(|c| format!("fault_imu0_{c}")));
+    h.extend(
+        [
+            "truth_u",
+            "truth_v",
+            "truth_w",
+            "truth_roll",
+            "truth_pitch",
+            "truth_yaw",
+        ]
+        .iter()
+        .map(|s| s.to_string()),
+    );
+    w.write_record(&h)?;
+    let mut n = 0;
+    for s in Simulator::new(scn, seed) {
+        let mut row = vec![format!("{:.4}", s.t)];
+        match s.imu {
+            Some(v) => row.extend(v.iter().map(|x| format!("{x:.9e}"))),
+            None => row.extend(std::iter::repeat_n(String::new(), 6)),
+        }
+        for i in 0..6 {
+            row.push(if s.aiding_available[i] {
+                format!("{:.9e}", s.aiding[i])
+            } else {
+                String::new()
+            });
+        }
+        row.extend(s.fault.iter().map(|x| format!("{x:.9e}")));
+        row.extend(s.truth.state.iter().map(|x| format!("{x:.9e}")));
+        w.write_record(&row)?;
+        n += 1;
+    }
+    w.flush()?;
+    Ok(n)
+}

@@ -1,0 +1,351 @@
+//! Flight logs → SPEC §10 replay CSV.
+//!
+//! - PX4 ULog (`px4-ulog` crate, Auterion, MIT): the primary IMU
+//!   (`sensor_combined`), GNSS velocity (`vehicle_gps_position` or
+//!   `sensor_gps`, 3-D fix and valid NED velocity only) and attitude
+//!   (`vehicle_attitude` quaternion → ZYX Euler). The per-instance
+//!   `vehicle_imu` topics are left out: PX4's default logging records them at
+//!   1–2 Hz, unaligned, which no IMU monitor can use.
+//! - ArduPilot DataFlash (`ardupilot-binlog` crate): every IMU instance
+//!   (synchronous rows), GPS velocity and ATT.
+//! - CSV extracts not in SPEC §10 form: [`super::csv_extract`].
+//!
+//! Each aiding sample goes on the first IMU row at or after its timestamp.
+//! The attitude either autopilot logs comes from its own estimator on the
+//! same IMUs: it is not an independent sensor (SPEC §8 S6), so give it a
+//! wide R when replaying.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use anyhow::{bail, Context, Result};
+use imu_fdi::math::wrap_pi_f64;
+use px4_ulog::full_parser::{read_file, SomeVec};
+
+// The CSV-extract mapping is its own module; `any_to_replay_csv` dispatches
+// to it, and its old path here keeps working.
+pub use super::csv_extract::csv_extracts_to_replay_csv;
+
+/// What a conversion produced.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImportSummary {
+    /// IMU rows written.
+    pub rows: usize,
+    /// First and last time, s.
+    pub span: (f64, f64),
+    /// Mean IMU rate, Hz.
+    pub imu_rate_hz: f64,
+    /// IMU instances written (`imu0_…`, `imu1_…`, …).
+    pub imu_instances: usize,
+    /// Rows carrying a GNSS velocity.
+    pub gnss_rows: usize,
+    /// Rows carrying an attitude.
+    pub att_rows: usize,
+    /// Why the parser stopped early, if it did (only the valid prefix of
+    /// the log was converted).
+    pub ended_early: Option<String>,
+}
+
+fn column(fields: &HashMap<String, SomeVec>, name: &str) -> Option<Vec<f64>> {
+    Some(match fields.get(name)? {
+        SomeVec::Int8(v) => v.iter().map(|x| f64::from(*x)).collect(),
+        SomeVec::UInt8(v) => v.iter().map(|x| f64::from(*x)).collect(),
+        SomeVec::Int16(v) => v.iter().map(|x| f64::from(*x)).collect(),
+        SomeVec::UInt16(v) => v.iter().map(|x| f64::from(*x)).collect(),
+        SomeVec::Int32(v) => v.iter().map(|x| f64::from(*x)).collect(),
+        SomeVec::UInt32(v) => v.iter().map(|x| f64::from(*x)).collect(),
+        SomeVec::Int64(v) => v.iter().map(|x| *x as f64).collect(),
+        SomeVec::UInt64(v) => v.iter().map(|x| *x as f64).collect(),
+        SomeVec::Float(v) => v.iter().map(|x| f64::from(*x)).collect(),
+        SomeVec::Double(v) => v.clone(),
+        SomeVec::Bool(v) => v.iter().map(|x| f64::from(u8::from(*x))).collect(),
+        SomeVec::Char(_) => return None,
+    })
+}
+
+/// ZYX Euler angles (roll, pitch, yaw) of a Hamilton quaternion `[w, x, y, z]`
+/// rotating body FRD into NED.
+pub fn quaternion_to_euler(q: [f64; 4]) -> [f64; 3] {
+    let [w, x, y, z] = q;
+    let roll = (2.0 * (w * x + y * z)).atan2(1.0 - 2.0 * (x * x + y * y));
+    let pitch = (2.0 * (w * y - z * x)).clamp(-1.0, 1.0).asin();
+    let yaw = (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z));
+    [roll, pitch, yaw]
+}
+
+/// Converts a `.ulg` to a SPEC §10 CSV at `out`.
+pub fn ulog_to_replay_csv(input: &Path, out: &Path) -> Result<ImportSummary> {
+    let name = input
+        .to_str()
+        .with_context(|| format!("{}: path is not UTF-8", input.display()))?;
+    let parsed = read_file(name)
+        .with_context(|| format!("{}: not a readable ULog file", input.display()))?;
+    let first = |topic: &str| parsed.messages.get(topic).and_then(|m| m.values().next());
+    let imu = first("sensor_combined")
+        .with_context(|| format!("{}: no sensor_combined topic", input.display()))?;
+    let col = |f: &HashMap<String, SomeVec>, n: &str| {
+        column(f, n).with_context(|| format!("{}: missing field {n}", input.display()))
+    };
+    let t_imu = col(imu, "timestamp")?;
+    let g: Vec<Vec<f64>> = (0..3)
+        .map(|i| col(imu, &format!("gyro_rad[{i}]")))
+        .collect::<Result<_>>()?;
+    let a: Vec<Vec<f64>> = (0..3)
+        .map(|i| col(imu, &format!("accelerometer_m_s2[{i}]")))
+        .collect::<Result<_>>()?;
+    if t_imu.len() < 10 {
+        bail!("{}: fewer than 10 IMU samples", input.display());
+    }
+    let n = t_imu.len();
+    let mut gnss: Vec<Option<[f64; 3]>> = vec![None; n];
+    let mut att: Vec<Option<[f64; 3]>> = vec![None; n];
+    // Index of the first IMU row at or after time t (µs).
+    let slot = |t: f64| t_imu.partition_point(|x| *x < t);
+    if let Some(f) = first("vehicle_gps_position").or_else(|| first("sensor_gps")) {
+        let (t, vn, ve, vd) = (
+            col(f, "timestamp")?,
+            col(f, "vel_n_m_s")?,
+            col(f, "vel_e_m_s")?,
+            col(f, "vel_d_m_s")?,
+        );
+        let valid = column(f, "vel_ned_valid").unwrap_or_else(|| vec![1.0; t.len()]);
+        let fix = column(f, "fix_type").unwrap_or_else(|| vec![3.0; t.len()]);
+        for i in 0..t.len() {
+            if valid[i] > 0.5 && fix[i] >= 3.0 {
+                if let Some(s) = gnss.get_mut(slot(t[i])) {
+                    *s = Some([vn[i], ve[i], vd[i]]);
+                }
+            }
+        }
+    }
+    if let Some(f) = first("vehicle_attitude") {
+        let t = col(f, "timestamp")?;
+        let q: Vec<Vec<f64>> = (0..4)
+            .map(|i| col(f, &format!("q[{i}]")))
+            .collect::<Result<_>>()?;
+        for i in 0..t.len() {
+            if let Some(s) = att.get_mut(slot(t[i])) {
+                *s = Some(quaternion_to_euler([q[0][i], q[1][i], q[2][i], q[3][i]]));
+            }
+        }
+    }
+    let rows = ReplayRows {
+        t: t_imu.iter().map(|t| t * 1e-6).collect(),
+        imus: (0..n)
+            .map(|i| vec![[a[0][i], a[1][i], a[2][i], g[0][i], g[1][i], g[2][i]]])
+            .collect(),
+        gnss,
+        att,
+    };
+    let mut summary = write_replay_csv(out, &rows)?;
+    summary.ended_early = match &parsed.completeness {
+        px4_ulog::stream_parser::model::Completeness::Complete => None,
+        px4_ulog::stream_parser::model::Completeness::Truncated => {
+            Some("the file ends partway through a record".into())
+        }
+        px4_ulog::stream_parser::model::Completeness::MalformedRecord(why) => {
+            Some(format!("malformed record: {why}"))
+        }
+    };
+    Ok(summary)
+}
+
+/// IMU rows with the aiding that arrived at each row, ready for
+/// [`write_replay_csv`].
+#[derive(Debug, Clone, Default)]
+pub struct ReplayRows {
+    /// Row times, s.
+    pub t: Vec<f64>,
+    /// Per row, per IMU instance: `[a_x, a_y, a_z, p, q, r]`.
+    pub imus: Vec<Vec<[f64; 6]>>,
+    /// Per row: GNSS NED velocity, if one arrived.
+    pub gnss: Vec<Option<[f64; 3]>>,
+    /// Per row: roll, pitch, yaw (rad), if one arrived.
+    pub att: Vec<Option<[f64; 3]>>,
+}
+
+/// Writes `rows` as a SPEC §10 CSV (`imu{k}_…` per instance, `gnss_*`,
+/// `att_*`); rows whose time does not increase are dropped.
+pub fn write_replay_csv(out: &Path, rows: &ReplayRows) -> Result<ImportSummary> {
+    let n = rows.t.len();
+    let instances = rows.imus.iter().map(Vec::len).max().unwrap_or(0);
+    if n < 10 || instances == 0 {
+        bail!("fewer than 10 IMU samples to write to {}", out.display());
+    }
+    let mut w =
+        csv::Writer::from_path(out).with_context(|| format!("cannot write {}", out.display()))?;
+    let mut header = vec!["t".to_string()];
+    for k in 0..instances {
+        for c in ["ax", "ay", "az", "gx", "gy", "gz"] {
+            header.push(format!("imu{k}_{c}"));
+        }
+    }
+    for c in [
+        "gnss_vn",
+        "gnss_ve",
+        "gnss_vd",
+        "att_roll",
+        "att_pitch",
+        "att_yaw",
+    ] {
+        header.push(c.into());
+    }
+    w.write_record(&header)?;
+    let cell = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x}"));
+    let mut last_t = f64::NEG_INFINITY;
+    let mut written = 0;
+    let (mut gnss_rows, mut att_rows) = (0, 0);
+    for (i, &t) in rows.t.iter().enumerate() {
+        if t <= last_t || !t.is_finite() {
+            continue;
+        }
+        last_t = t;
+        let mut rec = vec![format!("{t}")];
+        let imus = rows.imus.get(i).map_or(&[][..], Vec::as_slice);
+        for k in 0..instances {
+            let s = imus.get(k);
+            rec.extend((0..6).map(|c| cell(s.and_then(|s| s.get(c).copied()))));
+        }
+        let g = rows.gnss.get(i).copied().flatten();
+        let a = rows.att.get(i).copied().flatten();
+        gnss_rows += usize::from(g.is_some());
+        att_rows += usize::from(a.is_some());
+        rec.extend((0..3).map(|k| cell(g.map(|v| v[k]))));
+        rec.extend((0..3).map(|k| cell(a.map(|v| v[k]))));
+        w.write_record(&rec)?;
+        written += 1;
+    }
+    w.flush()?;
+    let span = (
+        rows.t.first().copied().unwrap_or(0.0),
+        rows.t.last().copied().unwrap_or(0.0),
+    );
+    Ok(ImportSummary {
+        rows: written,
+        span,
+        imu_rate_hz: (n - 1) as f64 / (span.1 - span.0).max(1e-9),
+        imu_instances: instances,
+        gnss_rows,
+        att_rows,
+        ended_early: None,
+    })
+}
+
+/// Converts an ArduPilot DataFlash `.bin` to a SPEC §10 CSV at `out`: every
+/// IMU instance (IMU, IMU2, IMU3, synchronous rows only), GPS velocity with a
+/// 3-D fix (`Spd`·cos/sin `GCrs`, `VZ`) and the ATT attitude (degrees → rad),
+/// each aiding sample on the first IMU row at or after its time. Parsed with
+/// the `ardupilot-binlog` crate.
+///
+/// ATT is ArduPilot's own estimate from the same IMUs: not an independent
+/// sensor (SPEC §8 S6), so give it a wide R when replaying.
+pub fn dataflash_to_replay_csv(input: &Path, out: &Path) -> Result<ImportSummary> {
+    let log = crate::eval::parity_replay::read_dataflash_imus(input)?;
+    let n = log.t.len();
+    let mut gnss: Vec<Option<[f64; 3]>> = vec![None; n];
+    let mut att: Vec<Option<[f64; 3]>> = vec![None; n];
+    let slot = |t: f64| log.t.partition_point(|x| *x < t);
+    let file = ardupilot_binlog::File::open(input)
+        .with_context(|| format!("cannot read {}", input.display()))?;
+    let entries = file
+        .entries()
+        .with_context(|| format!("{}: not a DataFlash log", input.display()))?;
+    let deg = std::f64::consts::PI / 180.0;
+    for e in entries {
+        // A corrupt or truncated tail: keep what was read.
+        let Ok(e) = e else { break };
+        let is_gps = e.name == "GPS";
+        if !is_gps && e.name != "ATT" {
+            continue;
+        }
+        // Old GPS messages carry GPS time of week in TimeMS and boot time in T.
+        let boot_ms = if is_gps { "T" } else { "TimeMS" };
+        // (Integer fields decode as signed or unsigned by format: read as f64.)
+        let t_us = e
+            .get_f64("TimeUS")
+            .or_else(|| e.get_f64(boot_ms).map(|ms| ms * 1000.0))
+            .or(e.timestamp_usec.map(|t| t as f64));
+        let Some(t_us) = t_us else { continue };
+        let v = |k: &str| e.get_f64(k).unwrap_or(f64::NAN);
+        let idx = slot(t_us * 1e-6);
+        if is_gps {
+            if v("Status") < 3.0 {
+                continue;
+            }
+            let (spd, crs) = (v("Spd"), v("GCrs") * deg);
+            let vel = [spd * crs.cos(), spd * crs.sin(), v("VZ")];
+            if let (true, Some(s)) = (vel.iter().all(|x| x.is_finite()), gnss.get_mut(idx)) {
+                *s = Some(vel);
+            }
+        } else {
+            let a = [
+                v("Roll") * deg,
+                v("Pitch") * deg,
+                wrap_pi_f64(v("Yaw") * deg),
+            ];
+            if let (true, Some(s)) = (a.iter().all(|x| x.is_finite()), att.get_mut(idx)) {
+                *s = Some(a);
+            }
+        }
+    }
+    let rows = ReplayRows {
+        t: log.t,
+        imus: log.imus,
+        gnss,
+        att,
+    };
+    write_replay_csv(out, &rows)
+}
+
+/// Converts a `.ulg` or `.bin` log, or a CSV extract (with its GNSS and
+/// attitude files, see [`csv_extracts_to_replay_csv`]), to a SPEC §10 CSV.
+pub fn any_to_replay_csv(
+    input: &Path,
+    gnss: Option<&Path>,
+    att: Option<&Path>,
+    out: &Path,
+) -> Result<ImportSummary> {
+    let is_csv = input
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    if is_csv {
+        return csv_extracts_to_replay_csv(input, gnss, att, out);
+    }
+    if gnss.is_some() || att.is_some() {
+        bail!(
+            "{}: --gnss and --att go with a CSV extract; a .ulg or .bin carries its own aiding",
+            input.display()
+        );
+    }
+    log_to_replay_csv(input, out)
+}
+
+/// Converts a `.ulg` or `.bin` log to a SPEC §10 CSV by its extension.
+pub fn log_to_replay_csv(input: &Path, out: &Path) -> Result<ImportSummary> {
+    match input
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("ulg") => ulog_to_replay_csv(input, out),
+        Some("bin") => dataflash_to_replay_csv(input, out),
+        _ => bail!(
+            "{}: unknown file type (expected a PX4 .ulg or an ArduPilot DataFlash .bin)",
+            input.display()
+        ),
+    }
+}
+
+/// Opens a CSV (cells trimmed) and reads its header row; errors name the file.
+pub fn open_csv(path: &Path) -> Result<(csv::Reader<std::fs::File>, csv::StringRecord)> {
+    let mut rdr = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .with_context(|| format!("cannot open {}", path.display()))?;
+    let headers = rdr
+        .headers()
+        .with_context(|| format!("{}: no header row", path.display()))?
+        .clone();
+    Ok((rdr, headers))
+}

@@ -1,0 +1,632 @@
+//! The CLI driven as a user would: spawned process, files in a temp dir.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic,
+    clippy::needless_range_loop
+)] // test code
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_imu-fdi-sim"))
+}
+
+fn bin_cmd_output(args: &[&str]) -> String {
+    let o = bin().args(args).output().unwrap();
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).to_string()
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("imu-fdi-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+#[test]
+fn simulate_then_replay_round_trip_detects_s2_faults() {
+    let input = tmp("s2.csv");
+    let out = tmp("s2-out.csv");
+    let summary = tmp("s2-summary.json");
+    let o = bin()
+        .args(["simulate", "s2", "--seed", "3", "--out"])
+        .arg(&input)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = bin()
+        .arg("replay")
+        .arg(&input)
+        .arg("--out")
+        .arg(&out)
+        .arg("--summary")
+        .arg(&summary)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("replayed 6500 rows"), "{stdout}");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    assert_eq!(s["aiding"], "DvlCompass");
+    for ch in s["channels"].as_array().unwrap() {
+        let faults = ch["fault_samples"].as_u64().unwrap();
+        let correct = ch["correct_samples"].as_u64().unwrap();
+        assert!(faults > 0 && correct as f64 > 0.6 * faults as f64, "{ch}");
+        assert_eq!(ch["false_alarm_samples"], 0, "{ch}");
+    }
+    let text = std::fs::read_to_string(&out).unwrap();
+    let header = text.lines().next().unwrap();
+    assert!(header.starts_with("t,x_u,x_v,x_w,x_roll,x_pitch,x_yaw,flag_ax"));
+    assert_eq!(text.lines().count(), 6501);
+}
+
+#[test]
+fn replay_reports_missing_columns_with_the_file_name() {
+    let input = tmp("bad-columns.csv");
+    std::fs::write(&input, "t,imu0_ax,imu0_ay\n0.0,1,2\n").unwrap();
+    let o = bin().arg("replay").arg(&input).output().unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("bad-columns.csv") && err.contains("imu0_az"),
+        "{err}"
+    );
+}
+
+#[test]
+fn replay_skips_non_monotonic_and_rejects_nan_rows() {
+    let input = tmp("jumbled.csv");
+    let mut s = String::from("t,imu0_ax,imu0_ay,imu0_az,imu0_gx,imu0_gy,imu0_gz,dvl_u,dvl_v,dvl_w,att_roll,att_pitch,att_yaw\n");
+    for k in 0..50 {
+        s.push_str(&format!(
+            "{},0,0,-9.80665,0,0,0,0,0,0,0,0,0\n",
+            k as f64 * 0.01
+        ));
+    }
+    s.push_str("0.2,0,0,-9.8,0,0,0,,,,,,\n"); // time goes backwards
+    s.push_str("0.6,NaN,0,-9.8,0,0,0,,,,,,\n"); // NaN sample
+    std::fs::write(&input, s).unwrap();
+    let o = bin().arg("replay").arg(&input).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("replayed 52 rows (1 skipped, 1 IMU rows rejected)"),
+        "{out}"
+    );
+}
+
+#[test]
+fn unknown_scenario_is_a_clear_error() {
+    let o = bin().args(["scenario", "s9"]).output().unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown scenario 's9'"));
+}
+
+#[test]
+fn closed_stdout_ends_quietly_instead_of_panicking() {
+    use std::process::Stdio;
+    let mut child = bin()
+        .args(["scenario", "s1", "--seeds", "3"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take()); // like `| head -0`
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(out.status.success());
+}
+
+#[test]
+fn otsukf_prints_the_rmse_table_beside_the_paper() {
+    let o = bin()
+        .args(["otsukf", "s3-paper", "--seeds", "1", "--augmented"])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("two-stage") && text.contains("augmented") && text.contains("paper"));
+    // The paper's f_ax RMSE is printed beside ours, and there are no false flags.
+    let fax = text.lines().find(|l| l.starts_with("f_ax")).unwrap();
+    let cols: Vec<f64> = fax
+        .split_whitespace()
+        .skip(1)
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert_eq!(cols.len(), 3);
+    assert_eq!(cols[2], 0.1087);
+    assert!(cols[0] > 0.0 && cols[0] < 0.2, "{fax}");
+    assert!(text.contains("in the last 2 s): 0"));
+    let bad = bin()
+        .args(["otsukf", "s3", "--seeds", "0"])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--seeds must be at least 1"));
+    for (args, why) in [
+        (&["--shape", "F9"][..], "expected F1, F2 or F3"),
+        (&["--adapt-gain", "0.5"][..], "at least 1"),
+        (&["--adapt-gain", "2,2"][..], "one value or six"),
+        (&["--qf-scale", "1,-1"][..], "two positive numbers"),
+    ] {
+        let bad = bin()
+            .args(["otsukf", "s3", "--seeds", "1"])
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(!bad.status.success(), "{args:?}");
+        let err = String::from_utf8_lossy(&bad.stderr);
+        assert!(err.contains(why), "{args:?}: {err}");
+    }
+    // Without faults the RMSE rows are empty and the noise rows are not:
+    // the adapted paper-setting estimate stays near its fixed-Q^f noise
+    // (0.019 over seeds 100–119).
+    let text = bin_cmd_output(&["otsukf", "s3-paper", "--seeds", "1", "--fault-free"]);
+    let rows: Vec<&str> = text.lines().filter(|l| l.starts_with("f_p")).collect();
+    assert_eq!(rows.len(), 2, "{text}");
+    assert!(rows[0].contains("NaN"), "{text}");
+    let noise: f64 = rows[1].split_whitespace().nth(1).unwrap().parse().unwrap();
+    assert!(noise > 0.01 && noise < 0.025, "{text}");
+}
+
+#[test]
+fn parity_s4_prints_per_seed_detections_and_isolations() {
+    let o = bin().args(["parity", "--seeds", "3"]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        s.contains("isolated to sensor 5 in 3/3 runs; false-alarm events before onset: 0"),
+        "{s}"
+    );
+    let o = bin().args(["parity", "--seeds", "0"]).output().unwrap();
+    assert!(!o.status.success());
+}
+
+#[test]
+fn parity_sweep_prints_one_row_per_method_and_writes_json() {
+    let json = tmp("sweep.json");
+    let o = bin()
+        .args([
+            "parity-sweep",
+            "--array",
+            "cone6",
+            "--kind",
+            "accel",
+            "--runs",
+            "3",
+            "--json",
+        ])
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = String::from_utf8_lossy(&o.stdout);
+    for m in [
+        "paper PCA",
+        "chi2/GLT",
+        "CUSUM",
+        "PX4-like",
+        "ArduPilot-like",
+    ] {
+        assert!(s.contains(m), "{m}: {s}");
+    }
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v.as_array().unwrap().len(), 5);
+}
+
+#[test]
+fn parity_replay_reads_the_real_log_and_rejects_bad_files() {
+    let log = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/ap_log171_3imu.csv"
+    );
+    let o = bin().args(["parity-replay", log]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(s.contains("9521 rows, 3 IMUs"), "{s}");
+    // The DataFlash excerpt directly.
+    let df = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/ap_log171_head.bin"
+    );
+    let o = bin_cmd_output(&[
+        "parity-replay",
+        df,
+        "--train-start",
+        "62",
+        "--train-s",
+        "20",
+    ]);
+    assert!(o.contains("3526 rows, 3 IMUs, t = 11.46..84.84 s"), "{o}");
+    // The crash (≈ 239 s) is the first alarm: nothing in normal flight.
+    assert!(s.contains("parity alarms: 239.52"), "{s}");
+    // --json: one object, the issue-14 schema, times in the file's seconds.
+    let log = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/ap_log171_3imu.csv"
+    );
+    let o = bin().args(["parity-replay", log, "--json"]).output().unwrap();
+    assert!(o.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    for kind in ["gyro", "accel"] {
+        let k = &v[kind];
+        let from = k["monitoring_from_s"].as_f64().unwrap();
+        assert!((109.0..111.0).contains(&from), "{from}");
+        for a in k["alarms"].as_array().unwrap() {
+            assert!(a["start_s"].as_f64().unwrap() >= 239.0, "{a}");
+            assert!(a["end_s"].as_f64().unwrap() >= a["start_s"].as_f64().unwrap());
+            assert!(a["sensor"].as_u64().unwrap() < 9);
+        }
+        for i in k["isolations"].as_array().unwrap() {
+            assert!(i["sensor"].as_u64().unwrap() < 9 && i["t_s"].as_f64().unwrap() >= 239.0);
+        }
+    }
+    // An injected 2 °/s step on IMU 1's z gyro at 150 s is isolated to sensor 5.
+    let o = bin()
+        .args(["parity-replay", log, "--json", "--inject", "1,5,2,150"])
+        .output()
+        .unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let first = &v["gyro"]["isolations"][0];
+    assert_eq!(first["sensor"].as_u64(), Some(5), "{v}");
+    let t = first["t_s"].as_f64().unwrap();
+    assert!((150.0..160.0).contains(&t), "{t}");
+
+    // One IMU only: a clear error naming the file.
+    let one = tmp("one-imu.csv");
+    std::fs::write(
+        &one,
+        "t,imu0_ax,imu0_ay,imu0_az,imu0_gx,imu0_gy,imu0_gz\n0,0,0,-9.8,0,0,0\n",
+    )
+    .unwrap();
+    let o = bin().arg("parity-replay").arg(&one).output().unwrap();
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("one-imu.csv") && e.contains("at least two IMUs"),
+        "{e}"
+    );
+
+    // A bad number: file and line.
+    let bad = tmp("bad-cell.csv");
+    let mut text = String::from("t,imu0_ax,imu0_ay,imu0_az,imu0_gx,imu0_gy,imu0_gz,imu1_ax,imu1_ay,imu1_az,imu1_gx,imu1_gy,imu1_gz\n");
+    text.push_str("0,0,0,-9.8,0,0,0,0,0,-9.8,0,0,0\n");
+    text.push_str("0.01,0,zero,-9.8,0,0,0,0,0,-9.8,0,0,0\n");
+    std::fs::write(&bad, text).unwrap();
+    let o = bin().arg("parity-replay").arg(&bad).output().unwrap();
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("bad-cell.csv: line 3") && e.contains("'zero' is not a number"),
+        "{e}"
+    );
+}
+
+#[test]
+fn campaign_shards_merge_to_the_same_table_and_bad_input_is_named() {
+    let (full, a, b) = (tmp("full.csv"), tmp("shard1.csv"), tmp("shard2.csv"));
+    let (fj, mj) = (tmp("full.json"), tmp("merged.json"));
+    let run = |args: &[&str], extra: &[&std::path::Path]| {
+        let mut c = bin();
+        c.args(args);
+        for p in extra {
+            c.arg(p);
+        }
+        let o = c.output().unwrap();
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        String::from_utf8_lossy(&o.stdout).to_string()
+    };
+    let s = run(
+        &["campaign", "s2", "--runs", "12", "--seed", "5", "--json"],
+        &[&fj],
+    );
+    assert!(s.contains("12 runs (indices 0..=11)"), "{s}");
+    assert!(s.contains("detection rate (runs)"), "{s}");
+    run(
+        &["campaign", "s2", "--runs", "12", "--seed", "5", "--csv"],
+        &[&full],
+    );
+    run(
+        &[
+            "campaign", "s2", "--runs", "12", "--seed", "5", "--shard", "1/2", "--csv",
+        ],
+        &[&a],
+    );
+    run(
+        &[
+            "campaign", "s2", "--runs", "12", "--seed", "5", "--shard", "2/2", "--csv",
+        ],
+        &[&b],
+    );
+    let m = run(&["merge", "--json"], &[&mj, &a, &b]);
+    assert!(m.contains("merged 2 files: 12 runs"), "{m}");
+    assert_eq!(
+        std::fs::read_to_string(&fj).unwrap(),
+        std::fs::read_to_string(&mj).unwrap()
+    );
+
+    // Bad shard, duplicate shard, broken row: clear messages, no panic.
+    let o = bin()
+        .args(["campaign", "s2", "--runs", "4", "--shard", "3/2"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("need 1 <= i <= n"));
+    let o = bin().arg("merge").arg(&a).arg(&a).output().unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("appears in more than one shard"));
+    let broken = tmp("broken.csv");
+    let text = std::fs::read_to_string(&a)
+        .unwrap()
+        .replacen(",1,", ",x,", 1);
+    std::fs::write(&broken, text).unwrap();
+    let o = bin().arg("merge").arg(&broken).output().unwrap();
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("broken.csv: line"), "{e}");
+}
+
+#[test]
+fn plot_writes_png_and_svg_for_a_ukf_scenario_and_for_s4() {
+    let dir = tmp("plots");
+    let o = bin()
+        .args(["plot", "s2", "--seed", "2", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(s.contains("wrote 8 files"), "{s}");
+    for tag in ["faults_flags", "estimates", "innovations", "statistic"] {
+        for ext in ["png", "svg"] {
+            let f = dir.join(format!("s2_seed2_{tag}.{ext}"));
+            let bytes = std::fs::read(&f).unwrap();
+            assert!(bytes.len() > 10_000, "{}", f.display());
+            if ext == "png" {
+                assert_eq!(&bytes[1..4], b"PNG");
+            } else {
+                assert!(String::from_utf8_lossy(&bytes).contains("<svg"));
+            }
+        }
+    }
+    let o = bin()
+        .args(["plot", "s4", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(dir.join("s4_seed1_parity.png").exists());
+    let o = bin()
+        .args(["plot", "nope", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown scenario 'nope'"));
+}
+
+#[test]
+fn px4_ulog_converts_and_replays_from_the_cli() {
+    let ulg = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/px4_fmuv3_outdoor_flight.ulg"
+    );
+    let out = tmp("fmuv3.csv");
+    let o = bin()
+        .args(["convert", ulg, "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        s.contains("341 rows of 1 IMU(s)") && s.contains("175 rows with GNSS velocity"),
+        "{s}"
+    );
+    let header = std::fs::read_to_string(&out).unwrap();
+    assert!(header.starts_with("t,imu0_ax,imu0_ay,imu0_az,imu0_gx,imu0_gy,imu0_gz,gnss_vn"));
+    let o = bin().args(["replay", ulg]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        s.contains("replayed 341 rows") && s.contains("aiding GnssAttitude"),
+        "{s}"
+    );
+    // Not a ULog: named, no panic.
+    let o = bin()
+        .args(["convert", "flight.txt", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("flight.txt: unknown file type"));
+    let fake = tmp("fake.ulg");
+    std::fs::write(&fake, b"ULog? no").unwrap();
+    let o = bin()
+        .arg("convert")
+        .arg(&fake)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("fake.ulg"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+fn json(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn channel<'a>(s: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
+    s["channels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["channel"] == name)
+        .unwrap()
+}
+
+#[test]
+fn dataflash_log_replays_every_imu_and_attributes_common_mode_flags() {
+    let bin_log = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/ap_log171_head.bin"
+    );
+    // Learning before the GPS fix (45 s) cannot learn the accelerometer
+    // offsets: when GPS velocity arrives, a_z is flagged on all three IMUs at
+    // once, which the replay attributes to the aiding/model, not to an IMU.
+    let summary = tmp("ap-head.json");
+    let o = bin()
+        .args(["replay", bin_log, "--learn", "10", "--summary"])
+        .arg(&summary)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("3526 rows of 3 IMU(s)") && out.contains("191 with GNSS velocity"),
+        "{out}"
+    );
+    let s = json(&summary);
+    assert_eq!(s["imus"], 3);
+    assert_eq!(s["profile"], "Flight");
+    for name in ["az", "imu1_az", "imu2_az"] {
+        let c = channel(&s, name);
+        let flagged = c["flagged_samples"].as_u64().unwrap();
+        assert!(flagged > 1000, "{c}");
+        assert_eq!(c["common_mode_samples"].as_u64().unwrap(), flagged, "{c}");
+    }
+    // Learning with GPS, then faults injected on IMU 1: found on IMU 1 only.
+    let faults = tmp("ap-head-faults.toml");
+    std::fs::write(
+        &faults,
+        "[sizes]\naccel = [1.0, 0.0, 0.0]\ngyro = [0.17453292519943295, 0.0, 0.0]\n\
+         f_unit = [1.0, 0.017453292519943295]\n\
+         [[faults]]\nchannel = 5\nstart = 15.0\nend = 20.0\nkind = \"E1\"\nsign = 1.0\n\
+         [[faults]]\nchannel = 1\nstart = 28.0\nend = 34.0\nkind = \"E1\"\nsign = -1.0\n",
+    )
+    .unwrap();
+    let o = bin()
+        .args(["replay", bin_log, "--from", "48", "--learn", "10"])
+        .arg("--faults")
+        .arg(&faults)
+        .args(["--fault-offset", "50", "--inject-imu", "1", "--summary"])
+        .arg(&summary)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = json(&summary);
+    let gz = channel(&s, "imu1_gz");
+    let t = gz["first_correct_s"].as_f64().unwrap();
+    assert!(
+        (65.0..68.5).contains(&t),
+        "10 °/s step at 65 s found at {t}: {gz}"
+    );
+    let ay = channel(&s, "imu1_ay");
+    let t = ay["first_correct_s"].as_f64().unwrap();
+    assert!(
+        (78.0..80.0).contains(&t),
+        "−1 m/s² step at 78 s found at {t}: {ay}"
+    );
+    assert!(ay["correct_samples"].as_u64().unwrap() > 200, "{ay}");
+    for c in s["channels"].as_array().unwrap() {
+        let name = c["channel"].as_str().unwrap();
+        if !name.starts_with("imu") || name.starts_with("imu2_g") {
+            assert_eq!(c["flagged_samples"], 0, "clean IMU flagged: {c}");
+        }
+    }
+}
+
+#[test]
+fn replay_rejects_bad_fault_tables_and_instances_by_name() {
+    let ulg = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/px4_fmuv3_outdoor_flight.ulg"
+    );
+    let bad = tmp("bad-faults.toml");
+    std::fs::write(
+        &bad,
+        "[[faults]]\nchannel = 9\nstart = 1.0\nend = 2.0\nkind = \"Stuck\"\nsign = 1.0\n",
+    )
+    .unwrap();
+    let o = bin()
+        .args(["replay", ulg, "--faults"])
+        .arg(&bad)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("bad-faults.toml") && e.contains("channel must be 0–5"),
+        "{e}"
+    );
+    let steps = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenarios/faults/steps.toml"
+    );
+    let o = bin()
+        .args(["replay", ulg, "--faults", steps, "--inject-imu", "2"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("cannot inject on IMU 2: the file has 1 IMU(s)"),
+        "{e}"
+    );
+}
+
+#[test]
+fn csv_extract_without_aiding_is_converted_then_refused_by_name() {
+    let mut x = String::from(
+        "Time (s),Gyroscope X (deg/s),Gyroscope Y (deg/s),Gyroscope Z (deg/s),\
+         Accelerometer X (g),Accelerometer Y (g),Accelerometer Z (g)\n",
+    );
+    for k in 0..50 {
+        x += &format!("{},0.1,0.2,0.3,0,0,1\n", 0.01 * k as f64);
+    }
+    let xio = tmp("handheld.csv");
+    std::fs::write(&xio, x).unwrap();
+    let o = bin().arg("replay").arg(&xio).output().unwrap();
+    assert!(!o.status.success());
+    let out = String::from_utf8_lossy(&o.stdout);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        out.contains("converted") && out.contains("50 rows of 1 IMU(s)"),
+        "{out}"
+    );
+    assert!(
+        err.contains("handheld.csv") && err.contains("no aiding"),
+        "{err}"
+    );
+    // A .ulg does not take the extract's aiding files.
+    let ulg = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/px4_fmuv3_outdoor_flight.ulg"
+    );
+    let o = bin()
+        .args(["convert", ulg, "--gnss", "g.csv", "--out"])
+        .arg(tmp("x.csv"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--gnss and --att go with a CSV extract"));
+}

@@ -1,0 +1,199 @@
+//! Real data, GIVEN ArduPilot log171 (three synchronous IMUs at 49 Hz, a
+//! Pixhawk in Loiter then Acro, crash at ≈ 239 s; CC BY-SA 3.0, see
+//! tests/data/LICENSE-ap_log171.md), WHEN the parity monitor for real
+//! flights (`ParityConfig::gyro_flight`/`accel_flight`: in-flight relative
+//! calibration, multi-scale tests with covariances learned from the data)
+//! trains for 30 s from any start between 60 and 100 s and runs to the end,
+//! THEN the gyros raise no alarm in normal flight, the crash is flagged in
+//! the window the external DroneKit-LA analyser reports, and injected steps
+//! are isolated at the rates measured below (the issue-14 table: every IMU ×
+//! axis × sign, six onsets after monitoring start, five training starts,
+//! 15-s steps, isolated to the right sensor within 10 s and nothing else
+//! alarming before the crash). The figures are asserted as measured, so a
+//! change that loses detections or adds false alarms fails here.
+
+use std::path::Path;
+
+use hal_sim::array::ArrayKind;
+use imu_fdi_cli::eval::parity_replay::{
+    power_up_table, read_imu_log, replay_parity, replay_parity_with, step_table, ImuLog,
+    ParityMethod, StepCase,
+};
+
+/// DroneKit-LA: "IMU vs IMU2 gyro differ, max 11.7 deg/s", this interval.
+const ANALYSER: (f64, f64) = (239.825, 241.335);
+/// The crash begins (SOURCES.md: ≈ 239 s; the first saturated sample is at 239.16 s).
+const CRASH: f64 = 239.0;
+const TRAIN_STARTS: [f64; 5] = [60.0, 70.0, 80.0, 90.0, 100.0];
+/// Onsets, seconds after monitoring start.
+const ONSETS: [f64; 6] = [5.0, 25.0, 45.0, 65.0, 85.0, 105.0];
+
+fn log() -> ImuLog {
+    read_imu_log(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/ap_log171_3imu.csv"
+    )))
+    .unwrap()
+}
+
+#[test]
+fn gyros_are_quiet_in_normal_flight_from_any_training_start_and_flag_the_crash() {
+    let log = log();
+    for ts in [60.0, 65.0, 70.0, 75.0, 80.0, 85.0, 90.0, 95.0, 100.0] {
+        let r = replay_parity(&log, ArrayKind::Gyro, ts, 30.0, None).unwrap();
+        let from = r.monitoring_from.unwrap();
+        assert!((ts + 29.0..ts + 33.0).contains(&from), "{ts}: {from}");
+        assert!(
+            r.alarms.iter().all(|a| a.0 >= CRASH),
+            "{ts}: {:?}",
+            r.alarms
+        );
+        assert!(
+            r.isolations.iter().all(|a| a.1 >= CRASH),
+            "{ts}: {:?}",
+            r.isolations
+        );
+    }
+    let gyro = replay_parity(&log, ArrayKind::Gyro, 80.0, 30.0, None).unwrap();
+    // The crash: an alarm inside the analyser's interval (measured 240.0–240.5 s)…
+    assert!(
+        gyro.alarms
+            .iter()
+            .any(|a| a.0 >= CRASH && a.0 <= ANALYSER.1 && a.1 >= ANALYSER.0),
+        "{:?}",
+        gyro.alarms
+    );
+    // …and saturated gyros (beyond ±2,000 °/s) are marked, not used.
+    assert!(gyro.statuses.iter().any(|(_, s, t)| {
+        matches!(
+            s,
+            imu_fdi::parity::SensorStatus::OutOfRange | imu_fdi::parity::SensorStatus::Clipping
+        ) && (CRASH..ANALYSER.1).contains(t)
+    }));
+}
+
+#[test]
+fn accelerometer_false_alarms_in_normal_flight_stay_as_measured() {
+    // On this 2015 board the a_z of the three IMUs part by up to 2 m/s² for
+    // seconds under vibration; the rectification regressors remove most of
+    // it but not all. Measured over nine training starts (60, 65, …, 100 s):
+    // 1 alarm event before the crash (0.3 s at 147.8 s, training from
+    // 75 s), no sensor isolated.
+    let log = log();
+    let (mut events, mut isolations) = (0, 0);
+    for ts in [60.0, 65.0, 70.0, 75.0, 80.0, 85.0, 90.0, 95.0, 100.0] {
+        let r = replay_parity(&log, ArrayKind::Accel, ts, 30.0, None).unwrap();
+        events += r.alarms.iter().filter(|a| a.0 < CRASH).count();
+        isolations += r.isolations.iter().filter(|a| a.1 < CRASH).count();
+    }
+    assert!(events <= 1, "{events}");
+    assert!(isolations == 0, "{isolations}");
+}
+
+#[test]
+fn the_simulators_glt_cusum_method_still_replays() {
+    // The white-noise method (SPEC §7 defaults) trained at 80 s, as before
+    // the real-flight tests existed: quiet in normal flight.
+    let log = log();
+    for kind in [ArrayKind::Gyro, ArrayKind::Accel] {
+        let r = replay_parity_with(&log, kind, 80.0, 30.0, None, ParityMethod::GltCusum).unwrap();
+        assert!(r.alarms.iter().all(|a| a.0 >= CRASH), "{kind:?}");
+    }
+}
+
+fn passes(cases: &[StepCase], pred: impl Fn(&StepCase) -> bool) -> (usize, usize) {
+    let sel: Vec<_> = cases
+        .iter()
+        .filter(|c| c.injection.start + 10.0 < CRASH && pred(c))
+        .collect();
+    let ok = sel.iter().filter(|c| c.isolated && !c.false_alarm).count();
+    (ok, sel.len())
+}
+
+#[test]
+fn injected_gyro_steps_are_isolated_at_the_measured_rates() {
+    let log = log();
+    let cases = step_table(
+        &log,
+        ArrayKind::Gyro,
+        1.0_f64.to_radians(),
+        &TRAIN_STARTS,
+        30.0,
+        &ONSETS,
+        15.0,
+        CRASH,
+    )
+    .unwrap();
+    let axis = |a: usize| move |c: &StepCase| c.injection.channel == 3 + a;
+    // 1 °/s, measured: z 154/174, y 107/174, x 1/174 (IMU0's x gyro reads
+    // 12 °/s of aliased vibration per sample: with it, a step on IMU1 or
+    // IMU2 x cannot be told from the opposite step on the other one within
+    // 10 s at the isolation margin); 6 cases with a false alarm.
+    let (z, n) = passes(&cases, axis(2));
+    assert!(z >= 152 && n == 174, "{z}/{n}");
+    let (y, _) = passes(&cases, axis(1));
+    assert!(y >= 105, "{y}");
+    let fa = cases.iter().filter(|c| c.false_alarm).count();
+    assert!(fa <= 6, "{fa}");
+    // Every IMU is covered: z steps on each IMU isolated in ≥ 45 of 58 cases.
+    for imu in 0..3 {
+        let (ok, _) = passes(&cases, |c| {
+            c.injection.imu == imu && c.injection.channel == 5
+        });
+        assert!(ok >= 45, "imu {imu}: {ok}");
+    }
+    // Delays: every isolation within the 10 s, median a few seconds.
+    let mut d: Vec<f64> = cases.iter().filter_map(|c| c.delay).collect();
+    d.sort_by(f64::total_cmp);
+    assert!(d.last().is_some_and(|x| *x < 10.0));
+}
+
+#[test]
+fn injected_accelerometer_steps_are_isolated_at_the_measured_rates() {
+    let log = log();
+    let cases = step_table(
+        &log,
+        ArrayKind::Accel,
+        0.3,
+        &TRAIN_STARTS,
+        30.0,
+        &ONSETS,
+        15.0,
+        CRASH,
+    )
+    .unwrap();
+    // 0.3 m/s², measured: x 153/174, y 164/174, z 72/174 (the a_z
+    // vibration events above), 1 case with a false alarm.
+    let axis = |a: usize| move |c: &StepCase| c.injection.channel == a;
+    let (x, _) = passes(&cases, axis(0));
+    let (y, _) = passes(&cases, axis(1));
+    let (z, _) = passes(&cases, axis(2));
+    assert!(x >= 150 && y >= 160 && z >= 70, "{x} {y} {z}");
+    let fa = cases.iter().filter(|c| c.false_alarm).count();
+    assert!(fa <= 1, "{fa}");
+    for imu in 0..3 {
+        let (ok, _) = passes(&cases, |c| {
+            c.injection.imu == imu && c.injection.channel < 2
+        });
+        assert!(ok >= 100, "imu {imu}: {ok}");
+    }
+}
+
+#[test]
+fn a_gyro_bias_present_from_power_up_is_reported_without_naming_a_healthy_sensor() {
+    let log = log();
+    let cases = power_up_table(
+        &log,
+        ArrayKind::Gyro,
+        2.0_f64.to_radians(),
+        &TRAIN_STARTS,
+        30.0,
+        CRASH,
+    )
+    .unwrap();
+    // Measured: 63 of 90 isolated within 10 s of monitoring start (the
+    // offset check: relative bias above 1.2 °/s), never a healthy sensor.
+    let ok = cases.iter().filter(|c| c.delay.is_some()).count();
+    assert!(ok >= 60, "{ok}");
+    assert!(cases.iter().all(|c| !c.wrong_isolation));
+}

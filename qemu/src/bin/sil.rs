@@ -1,0 +1,195 @@
+//! Software-in-the-loop firmware for QEMU's `netduinoplus2` (STM32F405,
+//! Cortex-M4F): scenario S2 from hal-sim's emulated vehicle and sensors,
+//! through the same `f32` monitor as on the host, with the cost of every
+//! monitor step counted in instructions.
+//!
+//! Under `qemu-system-arm -icount shift=0` the STM32 TIM2 counter register
+//! advances once per executed instruction without any timer set-up, so two
+//! reads around `step` give its instruction count, repeatably. The stack is
+//! painted at boot (cortex-m-rt `paint-stack`) and the high-water mark read
+//! at the end. Output goes over semihosting; the exit status is non-zero if
+//! the run did not detect S2's faults as on the host.
+//!
+//! Build and run: `scripts/qemu-sil.sh` (see the README).
+#![no_std]
+#![no_main]
+#![allow(clippy::empty_loop)] // reached only after the semihosting exit has stopped QEMU
+#![allow(unsafe_code)] // the exception handler attribute; volatile reads of the painted stack
+
+use cortex_m_rt::{entry, exception, ExceptionFrame};
+use cortex_m_semihosting::{debug, hprintln};
+use hal_sim::Scenario;
+
+use imu_fdi_qemu::instructions;
+
+const PAINT: u32 = 0xcccc_cccc;
+
+extern "C" {
+    static _stack_end: u32;
+    static _stack_start: u32;
+}
+
+/// Bytes of stack ever used: the painted region no longer holding the paint.
+fn stack_high_water() -> u32 {
+    // SAFETY: the linker-provided bounds of the stack region; reads only.
+    unsafe {
+        let lo = core::ptr::addr_of!(_stack_end) as usize;
+        let hi = core::ptr::addr_of!(_stack_start) as usize;
+        let mut p = lo;
+        while p < hi && core::ptr::read_volatile(p as *const u32) == PAINT {
+            p += 4;
+        }
+        (hi - p) as u32
+    }
+}
+
+#[derive(Default)]
+struct Cost {
+    n: u32,
+    sum: u64,
+    max: u32,
+}
+
+impl Cost {
+    fn add(&mut self, c: u32) {
+        self.n += 1;
+        self.sum += u64::from(c);
+        self.max = self.max.max(c);
+    }
+    fn mean(&self) -> u64 {
+        if self.n == 0 {
+            0
+        } else {
+            self.sum / u64::from(self.n)
+        }
+    }
+}
+
+fn overhead() -> u32 {
+    let a = instructions();
+    let b = instructions();
+    b.wrapping_sub(a)
+}
+
+fn finish(ok: bool) -> ! {
+    if ok {
+        hprintln!("OK: every S2 fault detected on its channel with the right sign");
+        debug::exit(debug::EXIT_SUCCESS);
+    } else {
+        hprintln!("FAIL: S2 not detected as on the host");
+        debug::exit(debug::EXIT_FAILURE);
+    }
+    loop {}
+}
+
+/// S2 straight into the `f32` monitor: the instruction budget figures.
+#[cfg(not(feature = "sil-chip"))]
+#[entry]
+fn main() -> ! {
+    use hal_sim::setup::{monitor_config, DetectionTally, RunOptions};
+    use hal_sim::Simulator;
+    use imu_fdi::model::{ImuVec, MeasVec, Measurement};
+    use imu_fdi::monitor::UkfMonitor;
+
+    let scn = Scenario::s2();
+    let cfg = monitor_config::<f32>(&scn, &RunOptions::default());
+    let Ok(mut monitor) = UkfMonitor::<f32>::new(cfg) else {
+        hprintln!("invalid monitor configuration");
+        finish(false)
+    };
+    let overhead = overhead();
+    let (mut all, mut predict_only, mut with_update) =
+        (Cost::default(), Cost::default(), Cost::default());
+    let mut tally = DetectionTally::new(&scn);
+    for s in Simulator::new(&scn, 1) {
+        let u = ImuVec::from_fn(|i, _| s.imu.map_or(f32::NAN, |v| v[i] as f32));
+        let z = MeasVec::from_fn(|i, _| s.aiding[i] as f32);
+        let m = Measurement {
+            z,
+            available: s.aiding_available,
+        };
+        let t0 = instructions();
+        let r = monitor.step(&u, s.dt as f32, &m);
+        let cost = instructions().wrapping_sub(t0).saturating_sub(overhead);
+        all.add(cost);
+        if r.updated {
+            with_update.add(cost);
+        } else {
+            predict_only.add(cost);
+        }
+        tally.record(&s, &r);
+    }
+    hprintln!(
+        "S2 seed 1 on the emulated Cortex-M4F (f32 monitor, {} steps)",
+        all.n
+    );
+    hprintln!("instructions per step: mean {} max {}", all.mean(), all.max);
+    hprintln!(
+        "  predict only: mean {} max {} ({} steps)",
+        predict_only.mean(),
+        predict_only.max,
+        predict_only.n
+    );
+    hprintln!(
+        "  with aiding update: mean {} max {} ({} steps)",
+        with_update.mean(),
+        with_update.max,
+        with_update.n
+    );
+    hprintln!("peak stack: {} bytes", stack_high_water());
+    tally.print(|line| hprintln!("{}", line));
+    finish(tally.all_detected())
+}
+
+/// S2 along the firmware's data path: the ICM-42688-P driver reading
+/// hal-sim's emulated chip over `SpiDevice`, into the periodic `Monitor`
+/// task (`hal_sim::setup::run_via_chip`, the code the host CLI runs for
+/// `detections --via-chip`).
+#[cfg(feature = "sil-chip")]
+#[entry]
+fn main() -> ! {
+    let scn = Scenario::s2();
+    let overhead = overhead();
+    let mut cost = Cost::default();
+    let tally = hal_sim::setup::run_via_chip(&scn, 1, |step| {
+        let t0 = instructions();
+        step();
+        cost.add(instructions().wrapping_sub(t0).saturating_sub(overhead));
+    });
+    hprintln!("S2 seed 1 through the ICM-42688-P driver, the emulated chip and the Monitor task");
+    hprintln!(
+        "instructions per task step (driver read of the emulated chip + monitor): mean {} max {}",
+        cost.mean(),
+        cost.max
+    );
+    hprintln!("peak stack: {} bytes", stack_high_water());
+    match tally {
+        Some(t) => {
+            t.print(|line| hprintln!("{}", line));
+            finish(t.all_detected())
+        }
+        None => {
+            hprintln!("the driver or the monitor refused to start");
+            finish(false)
+        }
+    }
+}
+
+#[exception]
+unsafe fn HardFault(ef: &ExceptionFrame) -> ! {
+    hprintln!("HardFault at pc {:#010x}", ef.pc());
+    debug::exit(debug::EXIT_FAILURE);
+    loop {}
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    // The location only: formatting the message would link the float
+    // formatter (≈ 20 KB of flash) for messages that never occur.
+    match info.location() {
+        Some(l) => hprintln!("panic at {}:{}", l.file(), l.line()),
+        None => hprintln!("panic"),
+    }
+    debug::exit(debug::EXIT_FAILURE);
+    loop {}
+}

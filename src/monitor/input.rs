@@ -1,0 +1,90 @@
+//! What every single-IMU monitor does before and around its filter, in one
+//! place so the monitors cannot drift apart: the input checks (sample
+//! within range, measured period, aiding channels with a finite value, the
+//! gyro rates the lever-arm term may use) and the start-up phases
+//! (aligning → converging → learning → monitoring, SPEC §8a).
+
+use nalgebra::Vector3;
+
+use super::Phase;
+use crate::math::Real;
+use crate::model::{ImuVec, Measurement, NZ};
+
+/// Beyond this multiple of full scale a sample is not a measurement.
+const RANGE_FACTOR: f64 = 1.5;
+/// At or beyond this fraction of full scale a sample is clipping.
+const SATURATION_FRACTION: f64 = 0.98;
+/// A period longer than this many nominal periods is a gap.
+const MAX_PERIOD_FACTOR: f64 = 5.0;
+
+/// True when every channel is finite and within 1.5× its full scale.
+pub(crate) fn in_range<T: Real>(imu: &ImuVec<T>, full_scale: &ImuVec<T>) -> bool {
+    imu.iter()
+        .zip(full_scale.iter())
+        .all(|(v, fs)| v.finite() && v.abs() <= *fs * T::lit(RANGE_FACTOR))
+}
+
+/// True when any channel is at or beyond 98 % of its full scale.
+pub(crate) fn saturated<T: Real>(imu: &ImuVec<T>, full_scale: &ImuVec<T>) -> bool {
+    imu.iter()
+        .zip(full_scale.iter())
+        .any(|(v, fs)| v.abs() >= *fs * T::lit(SATURATION_FRACTION))
+}
+
+/// The measured period against the nominal one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Period<T> {
+    /// Finite, positive and at most five nominal periods.
+    Valid(T),
+    /// Longer than five nominal periods (a gap): the cap.
+    Long(T),
+    /// Not finite, zero or negative.
+    Invalid,
+}
+
+/// Classifies the measured `dt` against the nominal `period`.
+pub(crate) fn check_period<T: Real>(dt: T, period: T) -> Period<T> {
+    let max_dt = period * T::lit(MAX_PERIOD_FACTOR);
+    if !(dt.finite() && dt > T::zero()) {
+        Period::Invalid
+    } else if dt > max_dt {
+        Period::Long(max_dt)
+    } else {
+        Period::Valid(dt)
+    }
+}
+
+/// The aiding channels that arrived with a finite value.
+pub(crate) fn usable_aiding<T: Real>(aiding: &Measurement<T>) -> [bool; NZ] {
+    let mut available = aiding.available;
+    for (a, z) in available.iter_mut().zip(aiding.z.iter()) {
+        *a = *a && z.finite();
+    }
+    available
+}
+
+/// The gyro rates of a (bias-corrected) sample for the lever-arm term; zero
+/// for an invalid sample, which must not reach the state through it.
+pub(crate) fn lever_arm_rates<T: Real>(in_range: bool, imu: &ImuVec<T>) -> Vector3<T> {
+    if in_range {
+        imu.fixed_rows::<3>(3).into_owned()
+    } else {
+        Vector3::zeros()
+    }
+}
+
+/// The phase that follows `phase` after `time` in it since alignment:
+/// learning once converged (`converge_s`), monitoring once learned
+/// (`converge_s + learn_s`); `None` while it stays.
+pub(crate) fn next_phase<T: Real>(
+    phase: Phase,
+    time: T,
+    converge_s: T,
+    learn_s: T,
+) -> Option<Phase> {
+    match phase {
+        Phase::Converging if time >= converge_s => Some(Phase::Learning),
+        Phase::Learning if time >= converge_s + learn_s => Some(Phase::Monitoring),
+        _ => None,
+    }
+}
