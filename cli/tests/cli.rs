@@ -255,7 +255,10 @@ fn parity_replay_reads_the_real_log_and_rejects_bad_files() {
         env!("CARGO_MANIFEST_DIR"),
         "/../tests/data/ap_log171_3imu.csv"
     );
-    let o = bin().args(["parity-replay", log, "--json"]).output().unwrap();
+    let o = bin()
+        .args(["parity-replay", log, "--json"])
+        .output()
+        .unwrap();
     assert!(o.status.success());
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     for kind in ["gyro", "accel"] {
