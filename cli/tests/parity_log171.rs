@@ -125,16 +125,16 @@ fn injected_gyro_steps_are_isolated_at_the_measured_rates() {
     )
     .unwrap();
     let axis = |a: usize| move |c: &StepCase| c.injection.channel == 3 + a;
-    // 1 °/s, measured: z 154/174, y 107/174, x 1/174 (IMU0's x gyro reads
+    // 1 °/s, measured: z 156/174, y 108/174, x 1/174 (IMU0's x gyro reads
     // 12 °/s of aliased vibration per sample: with it, a step on IMU1 or
     // IMU2 x cannot be told from the opposite step on the other one within
-    // 10 s at the isolation margin); 6 cases with a false alarm.
+    // 10 s at the isolation margin); 8 cases with a false alarm.
     let (z, n) = passes(&cases, axis(2));
-    assert!(z >= 152 && n == 174, "{z}/{n}");
+    assert!(z >= 154 && n == 174, "{z}/{n}");
     let (y, _) = passes(&cases, axis(1));
-    assert!(y >= 105, "{y}");
+    assert!(y >= 106, "{y}");
     let fa = cases.iter().filter(|c| c.false_alarm).count();
-    assert!(fa <= 6, "{fa}");
+    assert!(fa <= 8, "{fa}");
     // Every IMU is covered: z steps on each IMU isolated in ≥ 45 of 58 cases.
     for imu in 0..3 {
         let (ok, _) = passes(&cases, |c| {
@@ -162,13 +162,13 @@ fn injected_accelerometer_steps_are_isolated_at_the_measured_rates() {
         CRASH,
     )
     .unwrap();
-    // 0.3 m/s², measured: x 153/174, y 164/174, z 72/174 (the a_z
-    // vibration events above), 1 case with a false alarm.
+    // 0.3 m/s², measured: x 156/174, y 164/174, z 76/174 (the a_z
+    // vibration events above), no case with a false alarm.
     let axis = |a: usize| move |c: &StepCase| c.injection.channel == a;
     let (x, _) = passes(&cases, axis(0));
     let (y, _) = passes(&cases, axis(1));
     let (z, _) = passes(&cases, axis(2));
-    assert!(x >= 150 && y >= 160 && z >= 70, "{x} {y} {z}");
+    assert!(x >= 154 && y >= 162 && z >= 74, "{x} {y} {z}");
     let fa = cases.iter().filter(|c| c.false_alarm).count();
     assert!(fa <= 1, "{fa}");
     for imu in 0..3 {

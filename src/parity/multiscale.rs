@@ -57,8 +57,6 @@ pub const VIBRATION_REGRESSORS: usize = 9;
 pub const REGRESSORS: usize = 7 + VIBRATION_REGRESSORS;
 /// Number of window lengths tested.
 pub const SCALES: usize = 3;
-/// Entries of the threshold table: 2 to 2¹⁰ degrees of freedom.
-pub const DOF_STEPS: usize = 10;
 
 type Phi<T> = SVector<T, REGRESSORS>;
 
@@ -246,49 +244,33 @@ pub struct Multiscale<T: Real, const N: usize, const W: usize> {
     filled: usize,
     /// Blocks since a score was last at or above the learning fraction.
     quiet_blocks: u32,
-    /// Squared t quantiles by degrees of freedom (see
-    /// [`thresholds`](Self::thresholds)).
-    thresholds: [T; DOF_STEPS],
+    /// The threshold of each window length (see
+    /// [`thresholds`](Self::thresholds)). The degrees of freedom are the
+    /// steady-state ones from the start: counting only the training's few
+    /// windows would switch the long windows off for the first minutes
+    /// (tried: it halved the detections on log171); the conservative start
+    /// of the long windows' covariances covers that period instead.
+    scale_h: [T; SCALES],
 }
 
 impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
-    /// Squared Student-t quantiles at `cfg.false_alarm / 2` for
-    /// `2, 4, 8, …, 2^DOF_STEPS` degrees of freedom (software `f64`; once, at
-    /// configuration). `None` when a quantile cannot be computed.
-    pub fn thresholds(cfg: &MultiscaleConfig<T>) -> Option<[T; DOF_STEPS]> {
-        let mut out = [T::zero(); DOF_STEPS];
-        for (j, h) in out.iter_mut().enumerate() {
-            let nu = libm::exp2(j as f64 + 1.0);
+    /// The threshold of each window length: the squared Student-t
+    /// quantile at `cfg.false_alarm / 2` with `variance_blocks / length`
+    /// degrees of freedom (software `f64`; once, at configuration). `None`
+    /// when a quantile cannot be computed.
+    pub fn thresholds(cfg: &MultiscaleConfig<T>) -> Option<[T; SCALES]> {
+        let mut out = [T::zero(); SCALES];
+        for (h, len) in out.iter_mut().zip(cfg.scales.iter()) {
+            let nu = (cfg.variance_blocks.to_f64() / f64::from((*len).max(1))).max(2.0);
             let t = student_t_upper_quantile(cfg.false_alarm * 0.5, nu).ok()?;
             *h = T::lit(t * t);
         }
         Some(out)
     }
 
-    /// Threshold for a covariance resting on `nu` independent windows:
-    /// the table interpolated in `log2 nu`, clamped to its ends.
-    fn threshold_for(&self, nu: T) -> T {
-        let x = (nu.to_f64().max(2.0)).log2() - 1.0;
-        let j = (x.floor().max(0.0) as usize).min(DOF_STEPS - 1);
-        let f = T::lit((x - j as f64).clamp(0.0, 1.0));
-        let a = self.thresholds.get(j).copied().unwrap_or(T::lit(1e6));
-        let b = self.thresholds.get(j + 1).copied().unwrap_or(a);
-        a + (b - a) * f
-    }
-
-    /// Independent windows of length `len` in the covariance memory. The
-    /// steady-state value, also right after training: counting only the
-    /// training's few windows would switch the long windows off for the
-    /// first minutes (tried: it halved the detections on log171); the
-    /// conservative start of the long windows' covariances covers that
-    /// period instead.
-    fn dof(&self, len: u16) -> T {
-        self.cfg.variance_blocks / T::lit(f64::from(len.max(1)))
-    }
-
     /// Fresh tests for a parity space of dimension `dim` with the
     /// thresholds from [`thresholds`](Self::thresholds).
-    pub fn new(cfg: MultiscaleConfig<T>, dim: usize, thresholds: [T; DOF_STEPS]) -> Self {
+    pub fn new(cfg: MultiscaleConfig<T>, dim: usize, thresholds: [T; SCALES]) -> Self {
         let ridge = Phi::<T>::from_fn(|i, _| match i {
             0 => T::lit(1e-9),
             1..=3 => cfg.ridge_motion,
@@ -311,13 +293,13 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             head: 0,
             filled: 0,
             quiet_blocks: 0,
-            thresholds,
+            scale_h: thresholds,
         }
     }
 
-    /// The threshold table (squared t quantiles by degrees of freedom).
-    pub fn threshold_set(&self) -> [T; DOF_STEPS] {
-        self.thresholds
+    /// The threshold of each window length.
+    pub fn threshold_set(&self) -> [T; SCALES] {
+        self.scale_h
     }
 
     /// Regressor vector of a block with mean `x`, centred difference `dx`
@@ -583,17 +565,15 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         let means = self.window_means();
         let mut best_ratio = T::zero();
         let mut isolate: Option<(usize, T)> = None;
-        let lens = self.cfg.scales;
-        for (i, ((m, cov), len)) in means
+        for (i, ((m, cov), h)) in means
             .iter()
             .zip(self.window_cov.iter())
-            .zip(lens.iter())
+            .zip(self.scale_h.iter())
             .enumerate()
         {
             let Some((rbar, phibar)) = m else {
                 continue;
             };
-            let h = &self.threshold_for(self.dof(*len));
             let total = cov + self.block_cov * self.prediction_weight(phibar);
             let Ok(l) = cholesky(&pad(&total, self.dim)) else {
                 continue;
@@ -627,9 +607,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             if let Ok(l) = cholesky(&pad(cov, self.dim)) {
                 let (best, second) = best_two(&l, v, &rbar, active);
                 if let Some((k, score, bias)) = best {
-                    let ratio = score
-                        / (self.threshold_for(self.dof(self.cfg.scales[0]))
-                            * self.cfg.gross_factor);
+                    let h0 = self.scale_h.first().copied().unwrap_or(T::lit(1e6));
+                    let ratio = score / (h0 * self.cfg.gross_factor);
                     if ratio > T::one() && ratio > best_ratio {
                         best_ratio = ratio;
                         out.ratio = ratio;
