@@ -3,7 +3,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::ukf::GateShift;
+use super::ukf::{GateShift, Split};
 use super::{Gate, SigmaParams, Ukf, UkfError, UpdateOutput};
 use crate::math::{cholesky, cholesky_solve_right, symmetrize, wrap_pi, Real};
 
@@ -130,6 +130,35 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
         fmat: &SMatrix<T, N, L>,
         qx: &SMatrix<T, N, N>,
     ) -> Result<(), UkfError<E>> {
+        self.predict_with(phi, fmat, qx, |ukf, qbar| ukf.predict(step, qbar))
+    }
+
+    /// [`predict`](Self::predict) with the bias-free filter's time update
+    /// done by [`Ukf::predict_split`] (`order`, `nonlinear` and `lin` as
+    /// there, `lin` taken at the full estimate).
+    #[allow(clippy::too_many_arguments)]
+    pub fn predict_split<E>(
+        &mut self,
+        order: &[usize; N],
+        nonlinear: usize,
+        step: impl FnMut(&SVector<T, N>) -> Result<SVector<T, N>, E>,
+        lin: impl Fn(&SVector<T, N>) -> SVector<T, N>,
+        phi: &SMatrix<T, N, N>,
+        fmat: &SMatrix<T, N, L>,
+        qx: &SMatrix<T, N, N>,
+    ) -> Result<(), UkfError<E>> {
+        self.predict_with(phi, fmat, qx, |ukf, qbar| {
+            ukf.predict_split(order, nonlinear, step, lin, qbar)
+        })
+    }
+
+    fn predict_with<E>(
+        &mut self,
+        phi: &SMatrix<T, N, N>,
+        fmat: &SMatrix<T, N, L>,
+        qx: &SMatrix<T, N, N>,
+        propagate: impl FnOnce(&mut Ukf<T, N, S>, &SMatrix<T, N, N>) -> Result<(), UkfError<E>>,
+    ) -> Result<(), UkfError<E>> {
         let x_full = self.state();
         let ubar = phi * self.v + fmat;
         let mut pf_pred = self.pf + self.qf;
@@ -155,7 +184,7 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
         let x_bar_prev = *self.bias_free.state();
         // Sigma points spread by P̄ around the full estimate.
         self.bias_free.reset(x_full, pbar);
-        if let Err(e) = self.bias_free.predict(step, &qbar) {
+        if let Err(e) = propagate(&mut self.bias_free, &qbar) {
             if !matches!(e, UkfError::CovarianceReset(_)) {
                 self.bias_free.reset(x_bar_prev, pbar);
                 return Err(e);
@@ -187,6 +216,50 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
         r: &SVector<T, M>,
         meas_angles: &[bool; M],
         gate: &mut Gate<T, M>,
+    ) -> Result<TwoStageUpdate<T, N, M, L>, UkfError<E>> {
+        self.update_with(z, available, h, hjac, r, meas_angles, gate, None)
+    }
+
+    /// [`update`](Self::update) for a measurement function affine in the
+    /// trailing states of `order` (the first `nonlinear` are those `h`
+    /// depends on nonlinearly), as [`Ukf::predict_split`] for the process:
+    /// the sigma points that leave those states at the predicted full
+    /// estimate are mapped through `hjac` instead of `h` — exact when `h`
+    /// is affine in the other states with `hjac` as its Jacobian there (M2:
+    /// `R(φ, θ, ψ)·v`, affine in `v`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn update_split<const M: usize, E>(
+        &mut self,
+        order: &[usize; N],
+        nonlinear: usize,
+        z: &SVector<T, M>,
+        available: &[bool; M],
+        h: impl FnMut(&SVector<T, N>) -> Result<SVector<T, M>, E>,
+        hjac: &SMatrix<T, M, N>,
+        r: &SVector<T, M>,
+        meas_angles: &[bool; M],
+        gate: &mut Gate<T, M>,
+    ) -> Result<TwoStageUpdate<T, N, M, L>, UkfError<E>> {
+        let lin = |d: &SVector<T, N>| hjac * d;
+        let split = Split {
+            order,
+            nonlinear,
+            lin: &lin,
+        };
+        self.update_with(z, available, h, hjac, r, meas_angles, gate, Some(split))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn update_with<const M: usize, E>(
+        &mut self,
+        z: &SVector<T, M>,
+        available: &[bool; M],
+        h: impl FnMut(&SVector<T, N>) -> Result<SVector<T, M>, E>,
+        hjac: &SMatrix<T, M, N>,
+        r: &SVector<T, M>,
+        meas_angles: &[bool; M],
+        gate: &mut Gate<T, M>,
+        split: Option<Split<'_, T, N, M>>,
     ) -> Result<TwoStageUpdate<T, N, M, L>, UkfError<E>> {
         // Predicted full estimate; the bias-free innovation is
         // r̄ = y − h(x̄) ≈ (y + S f̂) − h(x̄ + U f̂).
@@ -221,6 +294,7 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
             meas_angles,
             gate,
             &shift,
+            split,
         )?;
         // Channels not fused carry no information on the fault either: zero
         // their rows of S (and so of S f̂ and their columns of P^f Sᵀ).

@@ -277,7 +277,10 @@ impl<T: Real> OtsukfMonitor<T> {
             let meas = self.meas;
             let prior_var = self.filter.fault_covariance().diagonal();
             let prior_fault = *self.filter.fault();
-            match self.filter.update(
+            let (order, nonlinear) = self.meas.split();
+            match self.filter.update_split(
+                &order,
+                nonlinear,
                 &aiding.z,
                 &available,
                 |s| Ok::<_, ModelError>(meas.predict(s, &omega)),
@@ -346,10 +349,15 @@ impl<T: Real> OtsukfMonitor<T> {
         self.filter.set_fault_noise(Mat6::from_diagonal(&qf));
         let model = self.model;
         let u = *u_corr;
-        match self
-            .filter
-            .predict(|s| model.step(s, &u, dt), &phi, &fmat, &qx)
-        {
+        match self.filter.predict_split(
+            &VehicleModel::<T>::SPLIT_ORDER,
+            VehicleModel::<T>::NONLINEAR_STATES,
+            |s| model.step(s, &u, dt),
+            |d| model.step_deviation(d, &u, dt),
+            &phi,
+            &fmat,
+            &qx,
+        ) {
             Ok(()) => Ok(false),
             Err(UkfError::CovarianceReset(_)) => Ok(true),
             Err(UkfError::Model(e)) => Err(e),

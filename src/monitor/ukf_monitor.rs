@@ -286,7 +286,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let (a, b) = self.model.jacobians(&x, u, &trig);
         let q = discrete_process_noise_structured(&a, &b, &self.cfg.process_noise, dt);
         let model = self.model;
-        let reset = match self.ukf.predict(|s| model.step(s, u, dt), &q) {
+        let reset = match self.ukf.predict_split(
+            &VehicleModel::<T>::SPLIT_ORDER,
+            VehicleModel::<T>::NONLINEAR_STATES,
+            |s| model.step(s, u, dt),
+            |d| model.step_deviation(d, u, dt),
+            &q,
+        ) {
             Ok(()) => false,
             Err(UkfError::CovarianceReset(_)) => true,
             Err(UkfError::Model(e)) => return Err(e),
