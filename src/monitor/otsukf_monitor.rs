@@ -237,6 +237,7 @@ impl<T: Real> OtsukfMonitor<T> {
 
     /// One monitor period with the measured `dt` and whatever aiding
     /// arrived. Never panics; anomalies are reported in the health flags.
+    #[inline(never)] // one copy in the image, not one per caller (issue 17)
     pub fn step(&mut self, imu: &ImuVec<T>, dt: T, aiding: &Measurement<T>) -> OtsReport<T> {
         let b = self.cfg.base;
         let mut health = Health::default();
@@ -316,6 +317,7 @@ impl<T: Real> OtsukfMonitor<T> {
         self.compose(imu, health, updated)
     }
 
+    #[inline(never)] // own stack frame and one copy (issue 17)
     fn try_align(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>) {
         let Some(x) = align_state(&self.model, &self.meas, aiding, omega) else {
             return;
@@ -327,6 +329,7 @@ impl<T: Real> OtsukfMonitor<T> {
         self.phase_time = T::zero();
     }
 
+    #[inline(never)] // own stack frame and one copy (issue 17)
     fn predict(&mut self, u_corr: &ImuVec<T>, dt: T) -> Result<bool, ModelError> {
         let x = self.filter.state();
         let trig = self.model.attitude_trig(&x)?;
@@ -434,6 +437,7 @@ impl<T: Real> OtsukfMonitor<T> {
         }
     }
 
+    #[inline(never)] // own stack frame and one copy (issue 17)
     fn compose(&self, imu: &ImuVec<T>, health: Health, updated: bool) -> OtsReport<T> {
         let fault = *self.filter.fault();
         let pf = self.filter.fault_covariance();

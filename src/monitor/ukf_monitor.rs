@@ -157,6 +157,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
 
     /// One monitor period. Never panics; every anomaly is reported in
     /// [`Report::health`].
+    #[inline(never)] // one copy in the image, not one per caller (issue 17)
     pub fn step(&mut self, imu: &ImuVec<T>, dt: T, aiding: &Measurement<T>) -> Report<T> {
         let mut health = Health::default();
         let mut updated = false;
@@ -269,6 +270,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.report
     }
 
+    #[inline(never)] // own stack frame and one copy (issue 17)
     fn try_align(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>) {
         let Some(x) = align_state(&self.model, &self.meas, aiding, omega) else {
             return;
@@ -280,6 +282,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.phase_time = T::zero();
     }
 
+    #[inline(never)] // own stack frame and one copy (issue 17)
     fn predict(&mut self, u: &ImuVec<T>, dt: T) -> Result<bool, ModelError> {
         let x = *self.ukf.state();
         let trig = self.model.attitude_trig(&x)?;
@@ -311,6 +314,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         Ok(reset)
     }
 
+    #[inline(never)] // own stack frame and one copy (issue 17)
     fn update(
         &mut self,
         aiding: &Measurement<T>,
@@ -402,22 +406,27 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // The correction moved the current state: shift the history with it so
         // the next delayed measurement sees a consistent past.
         if self.delay_steps > 0 {
-            let mut dx = self.ukf.state() - x_prior;
-            for v in dx.iter_mut().skip(ROLL) {
-                *v = wrap_pi(*v);
-            }
-            let mut shifted = heapless::HistoryBuf::<StateVec<T>, { MAX_DELAY_STEPS + 1 }>::new();
-            for s in self.history.oldest_ordered() {
-                let mut n = s + dx;
-                for v in n.iter_mut().skip(ROLL) {
-                    *v = wrap_pi(*v);
-                }
-                shifted.write(n);
-            }
-            self.history = shifted;
+            self.shift_history(&x_prior);
         }
         self.last_h = h;
         Ok((rejected, out.covariance_reset.is_some()))
+    }
+
+    #[inline(never)] // keeps the copy of the history off `update`'s frame
+    fn shift_history(&mut self, x_prior: &StateVec<T>) {
+        let mut dx = self.ukf.state() - x_prior;
+        for v in dx.iter_mut().skip(ROLL) {
+            *v = wrap_pi(*v);
+        }
+        let mut shifted = heapless::HistoryBuf::<StateVec<T>, { MAX_DELAY_STEPS + 1 }>::new();
+        for s in self.history.oldest_ordered() {
+            let mut n = s + dx;
+            for v in n.iter_mut().skip(ROLL) {
+                *v = wrap_pi(*v);
+            }
+            shifted.write(n);
+        }
+        self.history = shifted;
     }
 
     /// Row scale that turns a raw innovation into a window sample.
@@ -430,6 +439,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
     }
 
+    #[inline(never)] // own stack frame and one copy (issue 17)
     fn after_update(&mut self, health: &Health) {
         let dt_learn = self.phase_time - self.learn_clock;
         self.learn_clock = self.phase_time;
@@ -652,6 +662,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
     }
 
+    #[inline(never)] // own stack frame and one copy (issue 17)
     fn compose(&self, imu: &ImuVec<T>, health: Health, updated: bool) -> Report<T> {
         let mut r = self.report;
         r.phase = self.phase;
