@@ -91,6 +91,15 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
     pub fn state_covariance(&self) -> SMatrix<T, N, N> {
         self.bias_free.covariance() + self.v * self.pf * self.v.transpose()
     }
+    /// The diagonal of [`state_covariance`](Self::state_covariance)
+    /// (`P̄ᵢᵢ + vᵢ P^f vᵢᵀ`, one product instead of two).
+    pub fn state_variance(&self) -> SVector<T, N> {
+        let vpf = self.v * self.pf;
+        SVector::<T, N>::from_fn(|i, _| {
+            let pii = self.bias_free.covariance().get((i, i)).copied();
+            pii.unwrap_or_else(T::zero) + vpf.row(i).dot(&self.v.row(i))
+        })
+    }
     /// The fault estimate `f̂`.
     pub fn fault(&self) -> &SVector<T, L> {
         &self.fault
@@ -178,7 +187,8 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
             }
         };
         let u = ubar * w;
-        let mut qbar = qx + ubar * (w * self.qf) * ubar.transpose();
+        // Ū W Q^f Ūᵀ = U Q^f Ūᵀ: two products once U is at hand.
+        let mut qbar = qx + (u * self.qf) * ubar.transpose();
         symmetrize(&mut qbar);
         let pbar = *self.bias_free.covariance();
         let x_bar_prev = *self.bias_free.state();

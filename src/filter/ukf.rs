@@ -246,7 +246,7 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         for pt in y.iter_mut() {
             *pt = diff(pt, &reference, &self.angles);
         }
-        self.combine(&reference, &y, q, failure)
+        self.combine(&reference, &y, N, q, failure)
     }
 
     /// Time update through `f` for a process that is *affine in the
@@ -307,7 +307,7 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
                 *m = minus;
             }
         }
-        self.combine(&reference, &e, q, failure)
+        self.combine(&reference, &e, nonlinear, q, failure)
     }
 
     /// The weighted mean and covariance of propagated sigma points given as
@@ -315,16 +315,25 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
     /// first: the circular mean is `y_0 ⊕ ē` with `ē = Σ wm_k e_k`, and the
     /// deviations from the mean are `e_k − ē` — already on the right
     /// branch, so no second wrap (this halves the wrapping work).
+    ///
+    /// Columns `k ≥ pairs_from` are symmetric pairs, `e_{1+N+k} = −e_{1+k}`
+    /// (the affine points of [`predict_split`](Self::predict_split)): they
+    /// add nothing to `ē`, and `(d − ē)(d − ē)ᵀ + (−d − ē)(−d − ē)ᵀ =
+    /// 2ddᵀ + 2ēēᵀ`, one outer product per pair instead of two.
     fn combine<E>(
         &mut self,
         reference: &SVector<T, N>,
         e: &[SVector<T, N>; S],
+        pairs_from: usize,
         q: &SMatrix<T, N, N>,
         failure: Option<LinalgError>,
     ) -> Result<(), UkfError<E>> {
+        let is_pair = |k: usize| (k > pairs_from && k <= N) || k > N + pairs_from;
         let mut offset = SVector::<T, N>::zeros();
-        for (pt, w) in e.iter().zip(self.weights.wm.iter()) {
-            offset += *pt * *w;
+        for (k, (pt, w)) in e.iter().zip(self.weights.wm.iter()).enumerate() {
+            if !is_pair(k) {
+                offset += *pt * *w;
+            }
         }
         let mut mean = reference + offset;
         for (v, is_angle) in mean.iter_mut().zip(self.angles.iter()) {
@@ -334,8 +343,18 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         }
         // Accumulate the lower triangle only (the result is symmetric).
         let mut p = *q;
-        for (pt, w) in e.iter().zip(self.weights.wc.iter()) {
-            add_outer_lower(&mut p, &(pt - offset), *w);
+        let mut offset_weight = T::zero();
+        for (k, (pt, w)) in e.iter().zip(self.weights.wc.iter()).enumerate() {
+            if !is_pair(k) {
+                add_outer_lower(&mut p, &(pt - offset), *w);
+            } else if k <= N {
+                let w2 = *w + *w;
+                add_outer_lower(&mut p, pt, w2);
+                offset_weight += w2;
+            }
+        }
+        if offset_weight != T::zero() {
+            add_outer_lower(&mut p, &offset, offset_weight);
         }
         mirror_lower(&mut p);
         if !(all_finite(mean.as_slice()) && all_finite(p.as_slice())) {

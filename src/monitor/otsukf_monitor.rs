@@ -441,7 +441,7 @@ impl<T: Real> OtsukfMonitor<T> {
     fn compose(&self, imu: &ImuVec<T>, health: Health, updated: bool) -> OtsReport<T> {
         let fault = *self.filter.fault();
         let pf = self.filter.fault_covariance();
-        let px = self.filter.state_covariance();
+        let px = self.filter.state_variance();
         let status = if self.phase == Phase::Monitoring {
             self.latched.map(|l| match l {
                 1 => ChannelState::FaultPositive,
@@ -459,7 +459,7 @@ impl<T: Real> OtsukfMonitor<T> {
             total_bias: fault,
             corrected_imu: imu - fault,
             state: self.filter.state(),
-            state_sigma: px.diagonal().map(|v| v.max(T::zero()).sqrt_fast()),
+            state_sigma: px.map(|v| v.max(T::zero()).sqrt_fast()),
             health,
             updated,
         }
