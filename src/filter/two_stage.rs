@@ -3,7 +3,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::ukf::{GateShift, Split};
+use super::ukf::{all_finite, GateShift, Split};
 use super::{Gate, SigmaParams, Ukf, UkfError, UpdateOutput};
 use crate::math::{cholesky, cholesky_solve_right, symmetrize, wrap_pi, Real};
 
@@ -330,11 +330,13 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
         let la = cholesky(&a).map_err(UkfError::InnovationCovariance)?;
         let kf = cholesky_solve_right(&la, &pf_st);
         let fault = self.fault + kf * rf;
-        // Joseph form: (I − K S) P (I − K S)ᵀ + K P_yy Kᵀ.
-        let ikf = SMatrix::<T, L, L>::identity() - kf * s;
-        let mut pf = ikf * self.pf * ikf.transpose() + kf * pyy * kf.transpose();
+        // P^f − K A Kᵀ = P^f − K (P^f Sᵀ)ᵀ (K = P^f Sᵀ A⁻¹): one product,
+        // where the Joseph form (I − K S) P (I − K S)ᵀ + K P_yy Kᵀ, equal
+        // for this optimal gain, takes four; symmetrised below, as the
+        // bias-free filter's `P − K P_xzᵀ`.
+        let mut pf = self.pf - kf * pf_st.transpose();
         symmetrize(&mut pf);
-        if !(fault.iter().all(|v| v.finite()) && pf.iter().all(|v| v.finite())) {
+        if !(all_finite(fault.as_slice()) && all_finite(pf.as_slice())) {
             return Err(UkfError::NonFinite);
         }
         self.fault = fault;

@@ -461,14 +461,17 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         let (l, failure) = self.factor_permuted(order);
         let gamma = self.weights.gamma;
         // Sigma point k is `center + dx_k`; its image `zs_k`.
-        let mut dxs = [SVector::<T, N>::zeros(); S];
+        // Column k of the scaled factor, and the images of `center ± col_k`
+        // (points 1 + k and 1 + N + k); for the affine columns of a split
+        // only `d_k = lin(col_k)`, the images being `z_0 ± d_k`.
+        let mut cols = [SVector::<T, N>::zeros(); N];
+        let mut lins = [SVector::<T, M>::zeros(); N];
         let mut zs = [SVector::<T, M>::zeros(); S];
         let z0 = h(center).map_err(UkfError::Model)?;
         if let Some(first) = zs.first_mut() {
             *first = z0;
         }
-        for k in 0..N {
-            let mut col = SVector::<T, N>::zeros();
+        for (k, (col, lin)) in cols.iter_mut().zip(lins.iter_mut()).enumerate() {
             for (i, oi) in order.iter().enumerate() {
                 if let (Some(c), Some(v)) = (col.get_mut(*oi), l.get((i, k))) {
                     *c = *v * gamma;
@@ -476,31 +479,51 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
             }
             let (zp, zm) = match &split {
                 Some(sp) if k >= nonlinear => {
-                    let d = (sp.lin)(&col);
-                    (z0 + d, z0 - d)
+                    *lin = (sp.lin)(col);
+                    (z0 + *lin, z0 - *lin)
                 }
                 _ => (
-                    h(&(center + col)).map_err(UkfError::Model)?,
-                    h(&(center - col)).map_err(UkfError::Model)?,
+                    h(&(center + *col)).map_err(UkfError::Model)?,
+                    h(&(center - *col)).map_err(UkfError::Model)?,
                 ),
             };
-            if let (Some(p), Some(zo)) = (dxs.get_mut(1 + k), zs.get_mut(1 + k)) {
-                *p = col;
+            if let Some(zo) = zs.get_mut(1 + k) {
                 *zo = zp;
             }
-            if let (Some(m), Some(zo)) = (dxs.get_mut(1 + N + k), zs.get_mut(1 + N + k)) {
-                *m = -col;
+            if let Some(zo) = zs.get_mut(1 + N + k) {
                 *zo = zm;
             }
         }
         let z_hat = weighted_mean(&zs, &self.weights.wm, meas_angles);
+        // P_zz = R + Σ w dz dzᵀ, P_xz = Σ w dx dzᵀ with dx = ±col_k (0 for
+        // the centre): per column w·col_k (dz₊ − dz₋)ᵀ, one rank-1 update
+        // instead of two. An affine pair has dz± = c ± d_k with
+        // c = z_0 ⊖ ẑ, so its two outer products are 2w (d dᵀ + c cᵀ).
+        let wc = &self.weights.wc;
+        let w_center = wc.first().copied().unwrap_or_else(T::zero);
+        let c = diff(&z0, &z_hat, meas_angles);
         let mut pzz = SMatrix::<T, M, M>::from_diagonal(r);
         let mut pxz = SMatrix::<T, N, M>::zeros();
-        for ((zp, dx), w) in zs.iter().zip(dxs.iter()).zip(self.weights.wc.iter()) {
-            let dz = diff(zp, &z_hat, meas_angles);
-            add_outer_lower(&mut pzz, &dz, *w);
-            pxz.ger(*w, dx, &dz, T::one());
+        let mut c_weight = w_center;
+        for (k, (col, lin)) in cols.iter().zip(lins.iter()).enumerate() {
+            let w = wc.get(1 + k).copied().unwrap_or_else(T::zero);
+            let w2 = w + w;
+            if split.is_some() && k >= nonlinear {
+                add_outer_lower(&mut pzz, lin, w2);
+                c_weight += w2;
+                pxz.ger(w2, col, lin, T::one());
+            } else {
+                let (Some(zp), Some(zm)) = (zs.get(1 + k), zs.get(1 + N + k)) else {
+                    continue;
+                };
+                let dp = diff(zp, &z_hat, meas_angles);
+                let dm = diff(zm, &z_hat, meas_angles);
+                add_outer_lower(&mut pzz, &dp, w);
+                add_outer_lower(&mut pzz, &dm, w);
+                pxz.ger(w, col, &(dp - dm), T::one());
+            }
         }
+        add_outer_lower(&mut pzz, &c, c_weight);
         mirror_lower(&mut pzz);
         // Not generic over the model's error type, so one copy of the
         // correction serves both update forms.
