@@ -139,37 +139,36 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
         fmat: &SMatrix<T, N, L>,
         qx: &SMatrix<T, N, N>,
     ) -> Result<(), UkfError<E>> {
-        self.predict_with(phi, fmat, qx, |ukf, qbar| ukf.predict(step, qbar))
+        self.predict_with(|v| phi * v + fmat, qx, |ukf, qbar| ukf.predict(step, qbar))
     }
 
     /// [`predict`](Self::predict) with the bias-free filter's time update
     /// done by [`Ukf::predict_split`] (`order`, `nonlinear` and `lin` as
-    /// there, `lin` taken at the full estimate).
-    #[allow(clippy::too_many_arguments)]
+    /// there, `lin` taken at the full estimate), and `Ū = Φ V + F` computed
+    /// by `coupling` from `V`, so that a caller who knows the structure of
+    /// `Φ` and `F` need not form them.
     pub fn predict_split<E>(
         &mut self,
         order: &[usize; N],
         nonlinear: usize,
         step: impl FnMut(&SVector<T, N>) -> Result<SVector<T, N>, E>,
         lin: impl Fn(&SVector<T, N>) -> SVector<T, N>,
-        phi: &SMatrix<T, N, N>,
-        fmat: &SMatrix<T, N, L>,
+        coupling: impl FnOnce(&SMatrix<T, N, L>) -> SMatrix<T, N, L>,
         qx: &SMatrix<T, N, N>,
     ) -> Result<(), UkfError<E>> {
-        self.predict_with(phi, fmat, qx, |ukf, qbar| {
+        self.predict_with(coupling, qx, |ukf, qbar| {
             ukf.predict_split(order, nonlinear, step, lin, qbar)
         })
     }
 
     fn predict_with<E>(
         &mut self,
-        phi: &SMatrix<T, N, N>,
-        fmat: &SMatrix<T, N, L>,
+        coupling: impl FnOnce(&SMatrix<T, N, L>) -> SMatrix<T, N, L>,
         qx: &SMatrix<T, N, N>,
         propagate: impl FnOnce(&mut Ukf<T, N, S>, &SMatrix<T, N, N>) -> Result<(), UkfError<E>>,
     ) -> Result<(), UkfError<E>> {
         let x_full = self.state();
-        let ubar = phi * self.v + fmat;
+        let ubar = coupling(&self.v);
         let mut pf_pred = self.pf + self.qf;
         symmetrize(&mut pf_pred);
         // W = P^f (P^f_{k+1|k})⁻¹; U = Ū W; Q̄ = Q^x + Ū W Q^f Ūᵀ.

@@ -247,6 +247,25 @@ impl<T: Real> VehicleModel<T> {
         b
     }
 
+    /// `A X` for a state Jacobian `A` of this model (or a multiple of one):
+    /// its lower-left 3×3 block (attitude rates against velocity) is zero,
+    /// so three 3×3 block products per column block instead of four
+    /// (162 multiply-adds instead of 216). Only the other blocks of `a`
+    /// are read.
+    pub fn mul_state_jacobian(a: &Mat6<T>, x: &Mat6<T>) -> Mat6<T> {
+        let (a_vv, a_va, a_aa) = (
+            a.fixed_view::<3, 3>(0, 0),
+            a.fixed_view::<3, 3>(0, 3),
+            a.fixed_view::<3, 3>(3, 3),
+        );
+        let (x_v, x_a) = (x.fixed_rows::<3>(0), x.fixed_rows::<3>(3));
+        let mut out = Mat6::zeros();
+        out.fixed_rows_mut::<3>(0)
+            .copy_from(&(a_vv * x_v + a_va * x_a));
+        out.fixed_rows_mut::<3>(3).copy_from(&(a_aa * x_a));
+        out
+    }
+
     /// Discrete transition matrix of one step, `Φ ≈ I + A dt + (A dt)²/2`.
     pub fn transition(&self, x: &StateVec<T>, u: &ImuVec<T>, dt: T) -> Result<Mat6<T>, ModelError> {
         let ad = self.jacobian_state(x, u)? * dt;
@@ -337,6 +356,17 @@ mod tests {
                 [ROLL, PITCH].contains(s)
             );
         }
+    }
+
+    #[test]
+    fn structured_jacobian_product_equals_the_dense_one() {
+        let m = VehicleModel::<f64>::default();
+        let x = StateVec::new(2.0, 0.3, -0.2, 0.4, -0.3, 2.5);
+        let u = ImuVec::new(0.5, -0.2, -9.5, 0.6, -0.8, 1.1);
+        let a = m.jacobian_state(&x, &u).unwrap();
+        let y = Mat6::from_fn(|i, j| (i * 6 + j) as f64 * 0.1 - 1.7);
+        let d = VehicleModel::mul_state_jacobian(&a, &y) - a * y;
+        assert!(d.amax() < 1e-13, "{:e}", d.amax());
     }
 
     #[test]

@@ -336,10 +336,16 @@ impl<T: Real> OtsukfMonitor<T> {
         let (a, b) = self.model.jacobians(&x, u_corr, &trig);
         let qx = discrete_process_noise_structured(&a, &b, &self.cfg.base.process_noise, dt);
         let ad = a * dt;
-        let phi = Mat6::identity() + ad + ad * ad * T::lit(0.5);
-        // x_{k+1} = step(x, u_m − f): ∂/∂f = −(I + A dt/2) B dt for the
-        // midpoint rule.
-        let fmat = -(Mat6::identity() + ad * T::lit(0.5)) * b * dt;
+        let bdt = b * dt;
+        // Φ = I + A dt + (A dt)²/2 and, for x_{k+1} = step(x, u_m − f) by
+        // the midpoint rule, F = ∂/∂f = −(I + A dt/2) B dt; so
+        // Φ V + F = V − B dt + A dt (V + (A dt V − B dt)/2): two products
+        // with A's block structure instead of three dense ones.
+        let coupling = |v: &Mat6<T>| {
+            let t = VehicleModel::mul_state_jacobian(&ad, v);
+            let inner = v + (t - bdt) * T::lit(0.5);
+            v - bdt + VehicleModel::mul_state_jacobian(&ad, &inner)
+        };
         let gain = self.boost.zip_map(&self.cfg.adapt_gain, |b, g| {
             if b > T::zero() {
                 g
@@ -357,8 +363,7 @@ impl<T: Real> OtsukfMonitor<T> {
             VehicleModel::<T>::NONLINEAR_STATES,
             |s| model.step(s, &u, dt),
             |d| model.step_deviation(d, &u, dt),
-            &phi,
-            &fmat,
+            coupling,
             &qx,
         ) {
             Ok(()) => Ok(false),

@@ -431,8 +431,7 @@ fn profile() {
             VehicleModel::<f32>::NONLINEAR_STATES,
             |s| m.step(s, &u, 0.01),
             |d| m.step_deviation(d, &u, 0.01),
-            &a,
-            &b,
+            |v| a * v + b,
             &p
         )
     );
