@@ -198,11 +198,17 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
     /// [`factor`](Self::factor) of `P` with its states permuted into
     /// `order` (row and column `i` of the factor are state `order[i]`).
     fn factor_permuted(&mut self, order: &[usize; N]) -> (SMatrix<T, N, N>, Option<LinalgError>) {
+        // The lower triangle only: `cholesky` reads no more.
         let permuted = |p: &SMatrix<T, N, N>| {
-            SMatrix::<T, N, N>::from_fn(|i, j| match (order.get(i), order.get(j)) {
-                (Some(a), Some(b)) => p.get((*a, *b)).copied().unwrap_or_else(T::zero),
-                _ => T::zero(),
-            })
+            let mut out = SMatrix::<T, N, N>::zeros();
+            for (j, b) in order.iter().enumerate() {
+                for (i, a) in order.iter().enumerate().skip(j) {
+                    if let (Some(o), Some(v)) = (out.get_mut((i, j)), p.get((*a, *b))) {
+                        *o = *v;
+                    }
+                }
+            }
+            out
         };
         match cholesky(&permuted(&self.p)) {
             Ok(l) => (l, None),
@@ -665,7 +671,17 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         }
         // K P_zz Kᵀ = K P_xzᵀ (K = P_xz P_zz⁻¹; the columns of channels not
         // fused are zero in both): one product instead of two.
-        let p = self.p - gain * pxz.transpose();
+        // The result is symmetric: the lower triangle only, then mirrored.
+        let mut p = self.p;
+        for j in 0..N {
+            for i in j..N {
+                let dot = gain.row(i).dot(&pxz.row(j));
+                if let Some(v) = p.get_mut((i, j)) {
+                    *v -= dot;
+                }
+            }
+        }
+        mirror_lower(&mut p);
         if !(all_finite(x.as_slice()) && all_finite(p.as_slice())) {
             return Err(UkfError::NonFinite);
         }
