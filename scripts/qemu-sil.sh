@@ -16,11 +16,43 @@ sizes() {
   size -A "$elf" | awk '$1 ~ /^\.(vector_table|text|rodata|data|bss|uninit)$/ { if ($1 != ".data" && $1 != ".bss" && $1 != ".uninit") f += $2; else r += $2 } END { printf "image: flash %d bytes (%.1f KiB; .vector_table + .text + .rodata), static RAM %d bytes (.data + .bss)\n", f, f / 1024, r }'
 }
 echo "== on-target tests (QEMU)"
-timeout 300 cargo target-tests -q
+timeout 300 cargo target-tests -q | tee target/qemu-target-tests.txt
 echo "== S2 software-in-the-loop, monitor (QEMU)"
-timeout 300 cargo sil -q
-sizes
+timeout 300 cargo sil -q | tee target/qemu-sil-monitor.txt
+sizes | tee -a target/qemu-sil-monitor.txt
 echo "== S2 software-in-the-loop, driver + emulated chip + Monitor task (QEMU)"
 timeout 300 cargo sil-chip -q | sed 's/^fault /chip fault /'
 sizes
 echo "note: both SIL images also carry hal-sim's f64 vehicle/sensor simulation (software double precision on the M4F)."
+
+# The budget figures as one line of JSON (issue 17): instructions per step
+# (UKF monitor: the S2 SIL image; two-stage monitor and parity: the on-target
+# tests), peak stack of the S2 SIL image, and flash of the firmware, of the
+# SIL image and of the imu_fdi code inside the firmware (sum of the sizes of
+# its `imu_fdi::` symbols, from arm-none-eabi-nm).
+if ! command -v arm-none-eabi-nm >/dev/null; then
+  apt-get update -qq && apt-get install -y -qq binutils-arm-none-eabi >/dev/null
+fi
+cargo build-firmware -q
+fw=target/thumbv7em-none-eabihf/release/firmware
+flash() {
+  size -A "$1" | awk '$1 ~ /^\.(vector_table|text|rodata)$/ { f += $2 } END { print f }'
+}
+field() { # field FILE REGEX: the first number captured by REGEX
+  sed -n -E "s/$2/\1/p" "$1" | head -n 1
+}
+tt=target/qemu-target-tests.txt
+sm=target/qemu-sil-monitor.txt
+imu_fdi_bytes=$(arm-none-eabi-nm --size-sort -C -S --radix=d "$fw" | awk '$3 ~ /^[tTrR]$/ && /imu_fdi::/ { s += $2 } END { print s + 0 }')
+printf '{"ukf_step_mean":%s,"ukf_step_max":%s,"otsukf_step_mean":%s,"otsukf_step_max":%s,"parity_step_mean":%s,"parity_step_max":%s,"parity_config":%s,"stack_peak_bytes":%s,"firmware_flash_bytes":%s,"sil_flash_bytes":%s,"imu_fdi_flash_bytes":%s}\n' \
+  "$(field "$sm" '^instructions per step: mean ([0-9]+) max [0-9]+.*')" \
+  "$(field "$sm" '^instructions per step: mean [0-9]+ max ([0-9]+).*')" \
+  "$(field "$tt" '^two-stage UKF monitor .*mean ([0-9]+) max [0-9]+ instructions.*')" \
+  "$(field "$tt" '^two-stage UKF monitor .*mean [0-9]+ max ([0-9]+) instructions.*')" \
+  "$(field "$tt" '^parity monitor .*per step mean ([0-9]+) max [0-9]+.*')" \
+  "$(field "$tt" '^parity monitor .*per step mean [0-9]+ max ([0-9]+).*')" \
+  "$(field "$tt" '^parity monitor .*configuration ([0-9]+) instructions.*')" \
+  "$(field "$sm" '^peak stack: ([0-9]+) bytes.*')" \
+  "$(flash "$fw")" \
+  "$(field "$sm" '^image: flash ([0-9]+) bytes.*')" \
+  "$imu_fdi_bytes"

@@ -17,7 +17,12 @@ pub fn estimate_as_written<T: Real>(
     dt: T,
     rbar: &ImuVec<T>,
 ) -> Option<ImuVec<T>> {
-    let hg = h * b * (-dt);
+    // M1's H is the identity: skip the product.
+    let hg = if h.is_identity(T::zero()) {
+        b * (-dt)
+    } else {
+        h * b * (-dt)
+    };
     solve_pivoted(hg, *rbar)
 }
 
@@ -80,7 +85,13 @@ pub fn estimate_corrected<T: Real>(
     for (mut row, wi) in wm.row_iter_mut().zip(w.iter()) {
         row *= *wi;
     }
-    let mut normal = m.tr_mul(&wm);
+    // Mᵀ W M is symmetric and `cholesky` reads its lower triangle only.
+    let mut normal = Mat6::<T>::zeros();
+    for b in 0..6 {
+        for a in b..6 {
+            normal[(a, b)] = m.column(a).dot(&wm.column(b));
+        }
+    }
     let mut rhs = rbar.tr_mul(&wm);
     let mut observed = [false; 6];
     // A column no monitored channel sees has a zero diagonal: decouple it.

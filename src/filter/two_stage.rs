@@ -3,7 +3,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use super::ukf::GateShift;
+use super::ukf::{all_finite, GateShift, Split};
 use super::{Gate, SigmaParams, Ukf, UkfError, UpdateOutput};
 use crate::math::{cholesky, cholesky_solve_right, symmetrize, wrap_pi, Real};
 
@@ -91,6 +91,15 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
     pub fn state_covariance(&self) -> SMatrix<T, N, N> {
         self.bias_free.covariance() + self.v * self.pf * self.v.transpose()
     }
+    /// The diagonal of [`state_covariance`](Self::state_covariance)
+    /// (`P̄ᵢᵢ + vᵢ P^f vᵢᵀ`, one product instead of two).
+    pub fn state_variance(&self) -> SVector<T, N> {
+        let vpf = self.v * self.pf;
+        SVector::<T, N>::from_fn(|i, _| {
+            let pii = self.bias_free.covariance().get((i, i)).copied();
+            pii.unwrap_or_else(T::zero) + vpf.row(i).dot(&self.v.row(i))
+        })
+    }
     /// The fault estimate `f̂`.
     pub fn fault(&self) -> &SVector<T, L> {
         &self.fault
@@ -130,8 +139,36 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
         fmat: &SMatrix<T, N, L>,
         qx: &SMatrix<T, N, N>,
     ) -> Result<(), UkfError<E>> {
+        self.predict_with(|v| phi * v + fmat, qx, |ukf, qbar| ukf.predict(step, qbar))
+    }
+
+    /// [`predict`](Self::predict) with the bias-free filter's time update
+    /// done by [`Ukf::predict_split`] (`order`, `nonlinear` and `lin` as
+    /// there, `lin` taken at the full estimate), and `Ū = Φ V + F` computed
+    /// by `coupling` from `V`, so that a caller who knows the structure of
+    /// `Φ` and `F` need not form them.
+    pub fn predict_split<E>(
+        &mut self,
+        order: &[usize; N],
+        nonlinear: usize,
+        step: impl FnMut(&SVector<T, N>) -> Result<SVector<T, N>, E>,
+        lin: impl Fn(&SVector<T, N>) -> SVector<T, N>,
+        coupling: impl FnOnce(&SMatrix<T, N, L>) -> SMatrix<T, N, L>,
+        qx: &SMatrix<T, N, N>,
+    ) -> Result<(), UkfError<E>> {
+        self.predict_with(coupling, qx, |ukf, qbar| {
+            ukf.predict_split(order, nonlinear, step, lin, qbar)
+        })
+    }
+
+    fn predict_with<E>(
+        &mut self,
+        coupling: impl FnOnce(&SMatrix<T, N, L>) -> SMatrix<T, N, L>,
+        qx: &SMatrix<T, N, N>,
+        propagate: impl FnOnce(&mut Ukf<T, N, S>, &SMatrix<T, N, N>) -> Result<(), UkfError<E>>,
+    ) -> Result<(), UkfError<E>> {
         let x_full = self.state();
-        let ubar = phi * self.v + fmat;
+        let ubar = coupling(&self.v);
         let mut pf_pred = self.pf + self.qf;
         symmetrize(&mut pf_pred);
         // W = P^f (P^f_{k+1|k})⁻¹; U = Ū W; Q̄ = Q^x + Ū W Q^f Ūᵀ.
@@ -149,13 +186,14 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
             }
         };
         let u = ubar * w;
-        let mut qbar = qx + ubar * (w * self.qf) * ubar.transpose();
+        // Ū W Q^f Ūᵀ = U Q^f Ūᵀ: two products once U is at hand.
+        let mut qbar = qx + (u * self.qf) * ubar.transpose();
         symmetrize(&mut qbar);
         let pbar = *self.bias_free.covariance();
         let x_bar_prev = *self.bias_free.state();
         // Sigma points spread by P̄ around the full estimate.
         self.bias_free.reset(x_full, pbar);
-        if let Err(e) = self.bias_free.predict(step, &qbar) {
+        if let Err(e) = propagate(&mut self.bias_free, &qbar) {
             if !matches!(e, UkfError::CovarianceReset(_)) {
                 self.bias_free.reset(x_bar_prev, pbar);
                 return Err(e);
@@ -187,6 +225,50 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
         r: &SVector<T, M>,
         meas_angles: &[bool; M],
         gate: &mut Gate<T, M>,
+    ) -> Result<TwoStageUpdate<T, N, M, L>, UkfError<E>> {
+        self.update_with(z, available, h, hjac, r, meas_angles, gate, None)
+    }
+
+    /// [`update`](Self::update) for a measurement function affine in the
+    /// trailing states of `order` (the first `nonlinear` are those `h`
+    /// depends on nonlinearly), as [`Ukf::predict_split`] for the process:
+    /// the sigma points that leave those states at the predicted full
+    /// estimate are mapped through `hjac` instead of `h` — exact when `h`
+    /// is affine in the other states with `hjac` as its Jacobian there (M2:
+    /// `R(φ, θ, ψ)·v`, affine in `v`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn update_split<const M: usize, E>(
+        &mut self,
+        order: &[usize; N],
+        nonlinear: usize,
+        z: &SVector<T, M>,
+        available: &[bool; M],
+        h: impl FnMut(&SVector<T, N>) -> Result<SVector<T, M>, E>,
+        hjac: &SMatrix<T, M, N>,
+        r: &SVector<T, M>,
+        meas_angles: &[bool; M],
+        gate: &mut Gate<T, M>,
+    ) -> Result<TwoStageUpdate<T, N, M, L>, UkfError<E>> {
+        let lin = |d: &SVector<T, N>| hjac * d;
+        let split = Split {
+            order,
+            nonlinear,
+            lin: &lin,
+        };
+        self.update_with(z, available, h, hjac, r, meas_angles, gate, Some(split))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn update_with<const M: usize, E>(
+        &mut self,
+        z: &SVector<T, M>,
+        available: &[bool; M],
+        h: impl FnMut(&SVector<T, N>) -> Result<SVector<T, M>, E>,
+        hjac: &SMatrix<T, M, N>,
+        r: &SVector<T, M>,
+        meas_angles: &[bool; M],
+        gate: &mut Gate<T, M>,
+        split: Option<Split<'_, T, N, M>>,
     ) -> Result<TwoStageUpdate<T, N, M, L>, UkfError<E>> {
         // Predicted full estimate; the bias-free innovation is
         // r̄ = y − h(x̄) ≈ (y + S f̂) − h(x̄ + U f̂).
@@ -221,6 +303,7 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
             meas_angles,
             gate,
             &shift,
+            split,
         )?;
         // Channels not fused carry no information on the fault either: zero
         // their rows of S (and so of S f̂ and their columns of P^f Sᵀ).
@@ -246,11 +329,13 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
         let la = cholesky(&a).map_err(UkfError::InnovationCovariance)?;
         let kf = cholesky_solve_right(&la, &pf_st);
         let fault = self.fault + kf * rf;
-        // Joseph form: (I − K S) P (I − K S)ᵀ + K P_yy Kᵀ.
-        let ikf = SMatrix::<T, L, L>::identity() - kf * s;
-        let mut pf = ikf * self.pf * ikf.transpose() + kf * pyy * kf.transpose();
+        // P^f − K A Kᵀ = P^f − K (P^f Sᵀ)ᵀ (K = P^f Sᵀ A⁻¹): one product,
+        // where the Joseph form (I − K S) P (I − K S)ᵀ + K P_yy Kᵀ, equal
+        // for this optimal gain, takes four; symmetrised below, as the
+        // bias-free filter's `P − K P_xzᵀ`.
+        let mut pf = self.pf - kf * pf_st.transpose();
         symmetrize(&mut pf);
-        if !(fault.iter().all(|v| v.finite()) && pf.iter().all(|v| v.finite())) {
+        if !(all_finite(fault.as_slice()) && all_finite(pf.as_slice())) {
             return Err(UkfError::NonFinite);
         }
         self.fault = fault;

@@ -90,6 +90,12 @@ fn diff<T: Real, const K: usize>(
     d
 }
 
+/// True when no element is NaN or infinite (over the contiguous storage:
+/// a plain loop, where nalgebra's element iterator walks strides).
+pub(crate) fn all_finite<T: Real>(v: &[T]) -> bool {
+    v.iter().all(|x| x.finite())
+}
+
 fn weighted_mean<T: Real, const K: usize, const S: usize>(
     pts: &[SVector<T, K>; S],
     wm: &[T; S],
@@ -160,20 +166,6 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         self.p = p;
     }
 
-    fn sigma_points(&self, center: &SVector<T, N>, l: &SMatrix<T, N, N>) -> [SVector<T, N>; S] {
-        let mut pts = [*center; S];
-        for (k, col) in l.column_iter().enumerate() {
-            let off = col * self.weights.gamma;
-            if let Some(p) = pts.get_mut(1 + k) {
-                *p += off;
-            }
-            if let Some(p) = pts.get_mut(1 + N + k) {
-                *p -= off;
-            }
-        }
-        pts
-    }
-
     /// Sigma point `k` of `center` with the pre-scaled factor `gl = γL`:
     /// the centre, then `+` and `−` each column.
     fn sigma_point(center: &SVector<T, N>, gl: &SMatrix<T, N, N>, k: usize) -> SVector<T, N> {
@@ -197,6 +189,35 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
                     SMatrix::<T, N, N>::from_diagonal(
                         &self.p_reset.diagonal().map(|v| v.abs().sqrt_fast()),
                     )
+                });
+                (l, Some(e))
+            }
+        }
+    }
+
+    /// [`factor`](Self::factor) of `P` with its states permuted into
+    /// `order` (row and column `i` of the factor are state `order[i]`).
+    fn factor_permuted(&mut self, order: &[usize; N]) -> (SMatrix<T, N, N>, Option<LinalgError>) {
+        // The lower triangle only: `cholesky` reads no more.
+        let permuted = |p: &SMatrix<T, N, N>| {
+            let mut out = SMatrix::<T, N, N>::zeros();
+            for (j, b) in order.iter().enumerate() {
+                for (i, a) in order.iter().enumerate().skip(j) {
+                    if let (Some(o), Some(v)) = (out.get_mut((i, j)), p.get((*a, *b))) {
+                        *o = *v;
+                    }
+                }
+            }
+            out
+        };
+        match cholesky(&permuted(&self.p)) {
+            Ok(l) => (l, None),
+            Err(e) => {
+                self.p = self.p_reset;
+                self.resets = self.resets.saturating_add(1);
+                let pr = permuted(&self.p_reset);
+                let l = cholesky(&pr).unwrap_or_else(|_| {
+                    SMatrix::<T, N, N>::from_diagonal(&pr.diagonal().map(|v| v.abs().sqrt_fast()))
                 });
                 (l, Some(e))
             }
@@ -227,14 +248,98 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
             *out = f(&Self::sigma_point(&self.x, &gl, k)).map_err(UkfError::Model)?;
         }
         // Deviations from the first point, wrapped once: `e_k = y_k ⊖ y_0`.
-        // The circular mean is `y_0 ⊕ ē` with `ē = Σ wm_k e_k`, and the
-        // deviations from the mean are `e_k − ē` — already on the right
-        // branch, so no second wrap (this halves the wrapping work).
         let reference = y.first().copied().unwrap_or_else(SVector::zeros);
-        let mut offset = SVector::<T, N>::zeros();
-        for (pt, w) in y.iter_mut().zip(self.weights.wm.iter()) {
+        for pt in y.iter_mut() {
             *pt = diff(pt, &reference, &self.angles);
-            offset += *pt * *w;
+        }
+        self.combine(&reference, &y, N, q, failure)
+    }
+
+    /// Time update through `f` for a process that is *affine in the
+    /// trailing states* of `order`: `order` lists every state once, the
+    /// first `nonlinear` of them being those `f` depends on nonlinearly, and
+    /// `lin` maps any deviation `δ` that is zero on those states to
+    /// `f(x + δ) ⊖ f(x)` at the current mean `x` — exactly, not to first
+    /// order.
+    ///
+    /// `P` is factorised with the states permuted into `order`, so the
+    /// sigma points of the trailing columns of the (lower-triangular)
+    /// factor leave the nonlinear states at the mean: their images are
+    /// `f(x) ± lin(γ sₖ)`, with no evaluation of `f`. Only `1 + 2·nonlinear`
+    /// points go through `f`. This is the unscented transform with a
+    /// different matrix square root of `P` than [`predict`](Self::predict)'s:
+    /// the two agree in the mean and covariance to every order the
+    /// transform captures (they differ in fourth moments of the nonlinear
+    /// states), and are identical for a process affine in every state.
+    ///
+    /// For the vehicle model the roll and pitch are the nonlinear states:
+    /// the velocity enters linearly (given the body rates) and the yaw
+    /// additively ([`VehicleModel::step_deviation`](crate::model::VehicleModel::step_deviation)).
+    pub fn predict_split<E>(
+        &mut self,
+        order: &[usize; N],
+        nonlinear: usize,
+        mut f: impl FnMut(&SVector<T, N>) -> Result<SVector<T, N>, E>,
+        lin: impl Fn(&SVector<T, N>) -> SVector<T, N>,
+        q: &SMatrix<T, N, N>,
+    ) -> Result<(), UkfError<E>> {
+        let (l, failure) = self.factor_permuted(order);
+        let gamma = self.weights.gamma;
+        let reference = f(&self.x).map_err(UkfError::Model)?;
+        let mut e = [SVector::<T, N>::zeros(); S];
+        for k in 0..N {
+            // Column k of the permuted factor, back in state order.
+            let mut col = SVector::<T, N>::zeros();
+            for (i, oi) in order.iter().enumerate() {
+                if let (Some(c), Some(v)) = (col.get_mut(*oi), l.get((i, k))) {
+                    *c = *v * gamma;
+                }
+            }
+            let (plus, minus) = if k < nonlinear {
+                let yp = f(&(self.x + col)).map_err(UkfError::Model)?;
+                let ym = f(&(self.x - col)).map_err(UkfError::Model)?;
+                (
+                    diff(&yp, &reference, &self.angles),
+                    diff(&ym, &reference, &self.angles),
+                )
+            } else {
+                let d = lin(&col);
+                (d, -d)
+            };
+            if let Some(p) = e.get_mut(1 + k) {
+                *p = plus;
+            }
+            if let Some(m) = e.get_mut(1 + N + k) {
+                *m = minus;
+            }
+        }
+        self.combine(&reference, &e, nonlinear, q, failure)
+    }
+
+    /// The weighted mean and covariance of propagated sigma points given as
+    /// deviations `e_k = y_k ⊖ y_0` from the image `reference = y_0` of the
+    /// first: the circular mean is `y_0 ⊕ ē` with `ē = Σ wm_k e_k`, and the
+    /// deviations from the mean are `e_k − ē` — already on the right
+    /// branch, so no second wrap (this halves the wrapping work).
+    ///
+    /// Columns `k ≥ pairs_from` are symmetric pairs, `e_{1+N+k} = −e_{1+k}`
+    /// (the affine points of [`predict_split`](Self::predict_split)): they
+    /// add nothing to `ē`, and `(d − ē)(d − ē)ᵀ + (−d − ē)(−d − ē)ᵀ =
+    /// 2ddᵀ + 2ēēᵀ`, one outer product per pair instead of two.
+    fn combine<E>(
+        &mut self,
+        reference: &SVector<T, N>,
+        e: &[SVector<T, N>; S],
+        pairs_from: usize,
+        q: &SMatrix<T, N, N>,
+        failure: Option<LinalgError>,
+    ) -> Result<(), UkfError<E>> {
+        let is_pair = |k: usize| (k > pairs_from && k <= N) || k > N + pairs_from;
+        let mut offset = SVector::<T, N>::zeros();
+        for (k, (pt, w)) in e.iter().zip(self.weights.wm.iter()).enumerate() {
+            if !is_pair(k) {
+                offset += *pt * *w;
+            }
         }
         let mut mean = reference + offset;
         for (v, is_angle) in mean.iter_mut().zip(self.angles.iter()) {
@@ -244,11 +349,21 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         }
         // Accumulate the lower triangle only (the result is symmetric).
         let mut p = *q;
-        for (e, w) in y.iter().zip(self.weights.wc.iter()) {
-            add_outer_lower(&mut p, &(e - offset), *w);
+        let mut offset_weight = T::zero();
+        for (k, (pt, w)) in e.iter().zip(self.weights.wc.iter()).enumerate() {
+            if !is_pair(k) {
+                add_outer_lower(&mut p, &(pt - offset), *w);
+            } else if k <= N {
+                let w2 = *w + *w;
+                add_outer_lower(&mut p, pt, w2);
+                offset_weight += w2;
+            }
+        }
+        if offset_weight != T::zero() {
+            add_outer_lower(&mut p, &offset, offset_weight);
         }
         mirror_lower(&mut p);
-        if !(mean.iter().all(|v| v.finite()) && p.iter().all(|v| v.finite())) {
+        if !(all_finite(mean.as_slice()) && all_finite(p.as_slice())) {
             return Err(UkfError::NonFinite);
         }
         self.x = mean;
@@ -277,7 +392,7 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         gate: &mut Gate<T, M>,
     ) -> Result<UpdateOutput<T, N, M>, UkfError<E>> {
         let center = self.x;
-        self.update_about(&center, z, available, h, r, meas_angles, gate, None)
+        self.update_about(&center, z, available, h, r, meas_angles, gate, None, None)
     }
 
     /// Update with a measurement that was taken when the state was
@@ -298,7 +413,7 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         meas_angles: &[bool; M],
         gate: &mut Gate<T, M>,
     ) -> Result<UpdateOutput<T, N, M>, UkfError<E>> {
-        self.update_about(delayed, z, available, h, r, meas_angles, gate, None)
+        self.update_about(delayed, z, available, h, r, meas_angles, gate, None, None)
     }
 
     /// [`update_delayed`](Self::update_delayed) with the outlier gate
@@ -315,8 +430,19 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         meas_angles: &[bool; M],
         gate: &mut Gate<T, M>,
         shift: &GateShift<T, M>,
+        split: Option<Split<'_, T, N, M>>,
     ) -> Result<UpdateOutput<T, N, M>, UkfError<E>> {
-        self.update_about(delayed, z, available, h, r, meas_angles, gate, Some(shift))
+        self.update_about(
+            delayed,
+            z,
+            available,
+            h,
+            r,
+            meas_angles,
+            gate,
+            Some(shift),
+            split,
+        )
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -330,22 +456,81 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         meas_angles: &[bool; M],
         gate: &mut Gate<T, M>,
         shift: Option<&GateShift<T, M>>,
+        split: Option<Split<'_, T, N, M>>,
     ) -> Result<UpdateOutput<T, N, M>, UkfError<E>> {
-        let (l, failure) = self.factor();
-        let chi = self.sigma_points(center, &l);
+        // Without a split every state is "nonlinear": the plain sigma points.
+        let identity: [usize; N] = core::array::from_fn(|i| i);
+        let (order, nonlinear) = match &split {
+            Some(sp) => (sp.order, sp.nonlinear),
+            None => (&identity, N),
+        };
+        let (l, failure) = self.factor_permuted(order);
+        let gamma = self.weights.gamma;
+        // Sigma point k is `center + dx_k`; its image `zs_k`.
+        // Column k of the scaled factor, and the images of `center ± col_k`
+        // (points 1 + k and 1 + N + k); for the affine columns of a split
+        // only `d_k = lin(col_k)`, the images being `z_0 ± d_k`.
+        let mut cols = [SVector::<T, N>::zeros(); N];
+        let mut lins = [SVector::<T, M>::zeros(); N];
         let mut zs = [SVector::<T, M>::zeros(); S];
-        for (out, pt) in zs.iter_mut().zip(chi.iter()) {
-            *out = h(pt).map_err(UkfError::Model)?;
+        let z0 = h(center).map_err(UkfError::Model)?;
+        if let Some(first) = zs.first_mut() {
+            *first = z0;
+        }
+        for (k, (col, lin)) in cols.iter_mut().zip(lins.iter_mut()).enumerate() {
+            for (i, oi) in order.iter().enumerate() {
+                if let (Some(c), Some(v)) = (col.get_mut(*oi), l.get((i, k))) {
+                    *c = *v * gamma;
+                }
+            }
+            let (zp, zm) = match &split {
+                Some(sp) if k >= nonlinear => {
+                    *lin = (sp.lin)(col);
+                    (z0 + *lin, z0 - *lin)
+                }
+                _ => (
+                    h(&(center + *col)).map_err(UkfError::Model)?,
+                    h(&(center - *col)).map_err(UkfError::Model)?,
+                ),
+            };
+            if let Some(zo) = zs.get_mut(1 + k) {
+                *zo = zp;
+            }
+            if let Some(zo) = zs.get_mut(1 + N + k) {
+                *zo = zm;
+            }
         }
         let z_hat = weighted_mean(&zs, &self.weights.wm, meas_angles);
+        // P_zz = R + Σ w dz dzᵀ, P_xz = Σ w dx dzᵀ with dx = ±col_k (0 for
+        // the centre): per column w·col_k (dz₊ − dz₋)ᵀ, one rank-1 update
+        // instead of two. An affine pair has dz± = c ± d_k with
+        // c = z_0 ⊖ ẑ, so its two outer products are 2w (d dᵀ + c cᵀ).
+        let wc = &self.weights.wc;
+        let w_center = wc.first().copied().unwrap_or_else(T::zero);
+        let c = diff(&z0, &z_hat, meas_angles);
         let mut pzz = SMatrix::<T, M, M>::from_diagonal(r);
         let mut pxz = SMatrix::<T, N, M>::zeros();
-        for ((zp, xp), w) in zs.iter().zip(chi.iter()).zip(self.weights.wc.iter()) {
-            let dz = diff(zp, &z_hat, meas_angles);
-            let dx = diff(xp, center, &self.angles);
-            pzz += dz * dz.transpose() * *w;
-            pxz += dx * dz.transpose() * *w;
+        let mut c_weight = w_center;
+        for (k, (col, lin)) in cols.iter().zip(lins.iter()).enumerate() {
+            let w = wc.get(1 + k).copied().unwrap_or_else(T::zero);
+            let w2 = w + w;
+            if split.is_some() && k >= nonlinear {
+                add_outer_lower(&mut pzz, lin, w2);
+                c_weight += w2;
+                pxz.ger(w2, col, lin, T::one());
+            } else {
+                let (Some(zp), Some(zm)) = (zs.get(1 + k), zs.get(1 + N + k)) else {
+                    continue;
+                };
+                let dp = diff(zp, &z_hat, meas_angles);
+                let dm = diff(zm, &z_hat, meas_angles);
+                add_outer_lower(&mut pzz, &dp, w);
+                add_outer_lower(&mut pzz, &dm, w);
+                pxz.ger(w, col, &(dp - dm), T::one());
+            }
         }
+        add_outer_lower(&mut pzz, &c, c_weight);
+        mirror_lower(&mut pzz);
         // Not generic over the model's error type, so one copy of the
         // correction serves both update forms.
         self.correct(
@@ -486,8 +671,18 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         }
         // K P_zz Kᵀ = K P_xzᵀ (K = P_xz P_zz⁻¹; the columns of channels not
         // fused are zero in both): one product instead of two.
-        let p = self.p - gain * pxz.transpose();
-        if !(x.iter().all(|v| v.finite()) && p.iter().all(|v| v.finite())) {
+        // The result is symmetric: the lower triangle only, then mirrored.
+        let mut p = self.p;
+        for j in 0..N {
+            for i in j..N {
+                let dot = gain.row(i).dot(&pxz.row(j));
+                if let Some(v) = p.get_mut((i, j)) {
+                    *v -= dot;
+                }
+            }
+        }
+        mirror_lower(&mut p);
+        if !(all_finite(x.as_slice()) && all_finite(p.as_slice())) {
             return Err(UkfError::NonFinite);
         }
         self.x = x;
@@ -500,6 +695,16 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
             covariance_reset: failure,
         })
     }
+}
+
+/// A measurement function affine in the trailing states of `order` (see
+/// [`Ukf::predict_split`]): `lin` maps a deviation that is zero on the first
+/// `nonlinear` states of `order` to `h(x + δ) − h(x)` at the sigma points'
+/// centre.
+pub(crate) struct Split<'a, T, const N: usize, const M: usize> {
+    pub order: &'a [usize; N],
+    pub nonlinear: usize,
+    pub lin: &'a dyn Fn(&SVector<T, N>) -> SVector<T, M>,
 }
 
 /// What the outlier gate tests when it is not the innovation being fused:

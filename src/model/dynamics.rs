@@ -143,6 +143,46 @@ impl<T: Real> VehicleModel<T> {
         }
     }
 
+    /// The states [`step`](Self::step) depends on nonlinearly come first in
+    /// this order (roll, pitch), then those it is affine in (the body
+    /// velocity, given the body rates, and the yaw, which enters only
+    /// itself): the `order` of [`Ukf::predict_split`](crate::filter::Ukf::predict_split)
+    /// with [`NONLINEAR_STATES`](Self::NONLINEAR_STATES) nonlinear states.
+    pub const SPLIT_ORDER: [usize; 6] = [ROLL, PITCH, 0, 1, 2, YAW];
+    /// How many leading states of [`SPLIT_ORDER`](Self::SPLIT_ORDER) enter
+    /// the step nonlinearly.
+    pub const NONLINEAR_STATES: usize = 2;
+
+    /// `step(x + δ, u, dt) − step(x, u, dt)` for a deviation `δ` with zero
+    /// roll and pitch, exactly (to rounding) for every `x`: the attitude
+    /// rates depend on roll and pitch only, so the attitude path is
+    /// unchanged and the yaw moves by `δψ`; the velocity equation is
+    /// `v̇ = Ω v + g(φ, θ) + a` with `Ω = −[ω×]` set by the body rates, so
+    /// the midpoint rule moves the velocity by `(I + Ω dt + Ω² dt²/2) δv`.
+    pub fn step_deviation(&self, d: &StateVec<T>, u: &ImuVec<T>, dt: T) -> StateVec<T> {
+        let (p, q, r) = (u[3], u[4], u[5]);
+        let omega = |v: [T; 3]| {
+            [
+                v[1] * r - v[2] * q,
+                v[2] * p - v[0] * r,
+                v[0] * q - v[1] * p,
+            ]
+        };
+        let h = dt * T::lit(0.5);
+        let dv = [d[0], d[1], d[2]];
+        let k1 = omega(dv);
+        let k2 = omega([dv[0] + k1[0] * h, dv[1] + k1[1] * h, dv[2] + k1[2] * h]);
+        let z = T::zero();
+        StateVec::new(
+            dv[0] + k2[0] * dt,
+            dv[1] + k2[1] * dt,
+            dv[2] + k2[2] * dt,
+            z,
+            z,
+            d[YAW],
+        )
+    }
+
     /// State Jacobian `A = ∂f/∂x`.
     pub fn jacobian_state(&self, x: &StateVec<T>, u: &ImuVec<T>) -> Result<Mat6<T>, ModelError> {
         let t = self.trig(x)?;
@@ -205,6 +245,25 @@ impl<T: Real> VehicleModel<T> {
             z, z, z, z,    t.sphi / t.cth,  t.cphi / t.cth,
         );
         b
+    }
+
+    /// `A X` for a state Jacobian `A` of this model (or a multiple of one):
+    /// its lower-left 3×3 block (attitude rates against velocity) is zero,
+    /// so three 3×3 block products per column block instead of four
+    /// (162 multiply-adds instead of 216). Only the other blocks of `a`
+    /// are read.
+    pub fn mul_state_jacobian(a: &Mat6<T>, x: &Mat6<T>) -> Mat6<T> {
+        let (a_vv, a_va, a_aa) = (
+            a.fixed_view::<3, 3>(0, 0),
+            a.fixed_view::<3, 3>(0, 3),
+            a.fixed_view::<3, 3>(3, 3),
+        );
+        let (x_v, x_a) = (x.fixed_rows::<3>(0), x.fixed_rows::<3>(3));
+        let mut out = Mat6::zeros();
+        out.fixed_rows_mut::<3>(0)
+            .copy_from(&(a_vv * x_v + a_va * x_a));
+        out.fixed_rows_mut::<3>(3).copy_from(&(a_aa * x_a));
+        out
     }
 
     /// Discrete transition matrix of one step, `Φ ≈ I + A dt + (A dt)²/2`.
@@ -273,6 +332,41 @@ mod tests {
             m.step(&n, &ImuVec::zeros(), 0.01),
             Err(ModelError::NonFinite)
         );
+    }
+
+    #[test]
+    fn step_is_affine_in_velocity_and_yaw() {
+        let m = VehicleModel::<f64>::default();
+        let x = StateVec::new(2.0, 0.3, -0.2, 0.4, -0.3, 2.5);
+        let u = ImuVec::new(0.5, -0.2, -9.5, 0.6, -0.8, 1.1);
+        let y0 = m.step(&x, &u, 0.01).unwrap();
+        for d in [
+            StateVec::new(0.3, -0.2, 0.1, 0.0, 0.0, 0.05),
+            StateVec::new(-5.0, 2.0, 7.0, 0.0, 0.0, -0.4),
+        ] {
+            let y = m.step(&(x + d), &u, 0.01).unwrap();
+            let mut got = y - y0;
+            got[YAW] = wrap_pi(got[YAW]);
+            let want = m.step_deviation(&d, &u, 0.01);
+            assert!((got - want).amax() < 1e-13, "{:e}", (got - want).amax());
+        }
+        for (i, s) in VehicleModel::<f64>::SPLIT_ORDER.iter().enumerate() {
+            assert_eq!(
+                i < VehicleModel::<f64>::NONLINEAR_STATES,
+                [ROLL, PITCH].contains(s)
+            );
+        }
+    }
+
+    #[test]
+    fn structured_jacobian_product_equals_the_dense_one() {
+        let m = VehicleModel::<f64>::default();
+        let x = StateVec::new(2.0, 0.3, -0.2, 0.4, -0.3, 2.5);
+        let u = ImuVec::new(0.5, -0.2, -9.5, 0.6, -0.8, 1.1);
+        let a = m.jacobian_state(&x, &u).unwrap();
+        let y = Mat6::from_fn(|i, j| (i * 6 + j) as f64 * 0.1 - 1.7);
+        let d = VehicleModel::mul_state_jacobian(&a, &y) - a * y;
+        assert!(d.amax() < 1e-13, "{:e}", d.amax());
     }
 
     #[test]

@@ -88,6 +88,17 @@ impl<T: Real> MeasurementModel<T> {
         matches!(self.kind, AidingKind::DvlCompass)
     }
 
+    /// The states `h` depends on nonlinearly come first in this order, then
+    /// those it is affine in, with the Jacobian as coefficient: `(order,
+    /// nonlinear)` for the split sigma-point update. M2 is affine in the
+    /// body velocity given the attitude (`R(φ, θ, ψ)·v`); M1 in everything.
+    pub fn split(&self) -> ([usize; NZ], usize) {
+        match self.kind {
+            AidingKind::DvlCompass => ([0, 1, 2, ROLL, PITCH, YAW], 0),
+            AidingKind::GnssAttitude => ([ROLL, PITCH, YAW, 0, 1, 2], 3),
+        }
+    }
+
     /// `h(x)` given the body rate `omega` (for the lever-arm term).
     pub fn predict(&self, x: &StateVec<T>, omega: &Vector3<T>) -> MeasVec<T> {
         let v_sensor = Vector3::new(x[0], x[1], x[2]) + omega.cross(&self.lever_arm);

@@ -247,6 +247,7 @@ impl<T: Real> OtsukfMonitor<T> {
 
     /// One monitor period with the measured `dt` and whatever aiding
     /// arrived. Never panics; anomalies are reported in the health flags.
+    #[inline(never)] // one copy in the image, not one per caller (issue 17)
     pub fn step(&mut self, imu: &ImuVec<T>, dt: T, aiding: &Measurement<T>) -> OtsReport<T> {
         let b = self.cfg.base;
         let mut health = Health::default();
@@ -279,7 +280,10 @@ impl<T: Real> OtsukfMonitor<T> {
             let meas = self.meas;
             let prior_var = self.filter.fault_covariance().diagonal();
             let prior_fault = *self.filter.fault();
-            match self.filter.update(
+            let (order, nonlinear) = self.meas.split();
+            match self.filter.update_split(
+                &order,
+                nonlinear,
                 &aiding.z,
                 &available,
                 |s| Ok::<_, ModelError>(meas.predict(s, &omega)),
@@ -315,6 +319,7 @@ impl<T: Real> OtsukfMonitor<T> {
         self.compose(imu, health, updated)
     }
 
+    #[inline(never)] // own stack frame and one copy (issue 17)
     fn try_align(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>) {
         let Some(x) = align_state(&self.model, &self.meas, aiding, omega) else {
             return;
@@ -326,16 +331,23 @@ impl<T: Real> OtsukfMonitor<T> {
         self.phase_time = T::zero();
     }
 
+    #[inline(never)] // own stack frame and one copy (issue 17)
     fn predict(&mut self, u_corr: &ImuVec<T>, dt: T) -> Result<bool, ModelError> {
         let x = self.filter.state();
         let trig = self.model.attitude_trig(&x)?;
         let (a, b) = self.model.jacobians(&x, u_corr, &trig);
         let qx = discrete_process_noise_structured(&a, &b, &self.cfg.base.process_noise, dt);
         let ad = a * dt;
-        let phi = Mat6::identity() + ad + ad * ad * T::lit(0.5);
-        // x_{k+1} = step(x, u_m − f): ∂/∂f = −(I + A dt/2) B dt for the
-        // midpoint rule.
-        let fmat = -(Mat6::identity() + ad * T::lit(0.5)) * b * dt;
+        let bdt = b * dt;
+        // Φ = I + A dt + (A dt)²/2 and, for x_{k+1} = step(x, u_m − f) by
+        // the midpoint rule, F = ∂/∂f = −(I + A dt/2) B dt; so
+        // Φ V + F = V − B dt + A dt (V + (A dt V − B dt)/2): two products
+        // with A's block structure instead of three dense ones.
+        let coupling = |v: &Mat6<T>| {
+            let t = VehicleModel::mul_state_jacobian(&ad, v);
+            let inner = v + (t - bdt) * T::lit(0.5);
+            v - bdt + VehicleModel::mul_state_jacobian(&ad, &inner)
+        };
         let gain = self.boost.zip_map(&self.cfg.adapt_gain, |b, g| {
             if b > T::zero() {
                 g
@@ -348,10 +360,14 @@ impl<T: Real> OtsukfMonitor<T> {
         self.filter.set_fault_noise(Mat6::from_diagonal(&qf));
         let model = self.model;
         let u = *u_corr;
-        match self
-            .filter
-            .predict(|s| model.step(s, &u, dt), &phi, &fmat, &qx)
-        {
+        match self.filter.predict_split(
+            &VehicleModel::<T>::SPLIT_ORDER,
+            VehicleModel::<T>::NONLINEAR_STATES,
+            |s| model.step(s, &u, dt),
+            |d| model.step_deviation(d, &u, dt),
+            coupling,
+            &qx,
+        ) {
             Ok(()) => Ok(false),
             Err(UkfError::CovarianceReset(_)) => Ok(true),
             Err(UkfError::Model(e)) => Err(e),
@@ -428,10 +444,11 @@ impl<T: Real> OtsukfMonitor<T> {
         }
     }
 
+    #[inline(never)] // own stack frame and one copy (issue 17)
     fn compose(&self, imu: &ImuVec<T>, health: Health, updated: bool) -> OtsReport<T> {
         let fault = *self.filter.fault();
         let pf = self.filter.fault_covariance();
-        let px = self.filter.state_covariance();
+        let px = self.filter.state_variance();
         let status = if self.phase == Phase::Monitoring {
             self.latched.map(|l| match l {
                 1 => ChannelState::FaultPositive,
@@ -449,7 +466,7 @@ impl<T: Real> OtsukfMonitor<T> {
             total_bias: fault,
             corrected_imu: imu - fault,
             state: self.filter.state(),
-            state_sigma: px.diagonal().map(|v| v.max(T::zero()).sqrt_fast()),
+            state_sigma: px.map(|v| v.max(T::zero()).sqrt_fast()),
             health,
             updated,
         }

@@ -160,6 +160,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
 
     /// One monitor period. Never panics; every anomaly is reported in
     /// [`Report::health`].
+    #[inline(never)] // one copy in the image, not one per caller (issue 17)
     pub fn step(&mut self, imu: &ImuVec<T>, dt: T, aiding: &Measurement<T>) -> Report<T> {
         let mut health = Health::default();
         let mut updated = false;
@@ -255,6 +256,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.report
     }
 
+    #[inline(never)] // own stack frame and one copy (issue 17)
     fn try_align(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>) {
         let Some(x) = align_state(&self.model, &self.meas, aiding, omega) else {
             return;
@@ -266,13 +268,20 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.phase_time = T::zero();
     }
 
+    #[inline(never)] // own stack frame and one copy (issue 17)
     fn predict(&mut self, u: &ImuVec<T>, dt: T) -> Result<bool, ModelError> {
         let x = *self.ukf.state();
         let trig = self.model.attitude_trig(&x)?;
         let (a, b) = self.model.jacobians(&x, u, &trig);
         let q = discrete_process_noise_structured(&a, &b, &self.cfg.process_noise, dt);
         let model = self.model;
-        let reset = match self.ukf.predict(|s| model.step(s, u, dt), &q) {
+        let reset = match self.ukf.predict_split(
+            &VehicleModel::<T>::SPLIT_ORDER,
+            VehicleModel::<T>::NONLINEAR_STATES,
+            |s| model.step(s, u, dt),
+            |d| model.step_deviation(d, u, dt),
+            &q,
+        ) {
             Ok(()) => false,
             Err(UkfError::CovarianceReset(_)) => true,
             Err(UkfError::Model(e)) => return Err(e),
@@ -282,7 +291,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // second-order term changes X by < 1e-3 relative per step (largest
         // entry of A² dt²/2 ≈ g·ω·dt² against g·dt) and X is re-anchored by
         // every update, while it saves a 6×6 product per IMU period.
-        self.sensitivity += a * (self.sensitivity * dt) + b * dt;
+        self.sensitivity += VehicleModel::mul_state_jacobian(&a, &(self.sensitivity * dt)) + b * dt;
         self.last_input_b = b;
         // The state history only serves a configured aiding latency.
         if self.delay_steps > 0 {
@@ -291,6 +300,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         Ok(reset)
     }
 
+    #[inline(never)] // own stack frame and one copy (issue 17)
     fn update(
         &mut self,
         aiding: &Measurement<T>,
@@ -379,22 +389,27 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // The correction moved the current state: shift the history with it so
         // the next delayed measurement sees a consistent past.
         if self.delay_steps > 0 {
-            let mut dx = self.ukf.state() - x_prior;
-            for v in dx.iter_mut().skip(ROLL) {
-                *v = wrap_pi(*v);
-            }
-            let mut shifted = heapless::HistoryBuf::<StateVec<T>, { MAX_DELAY_STEPS + 1 }>::new();
-            for s in self.history.oldest_ordered() {
-                let mut n = s + dx;
-                for v in n.iter_mut().skip(ROLL) {
-                    *v = wrap_pi(*v);
-                }
-                shifted.write(n);
-            }
-            self.history = shifted;
+            self.shift_history(&x_prior);
         }
         self.last_h = h;
         Ok((rejected, out.covariance_reset.is_some()))
+    }
+
+    #[inline(never)] // keeps the copy of the history off `update`'s frame
+    fn shift_history(&mut self, x_prior: &StateVec<T>) {
+        let mut dx = self.ukf.state() - x_prior;
+        for v in dx.iter_mut().skip(ROLL) {
+            *v = wrap_pi(*v);
+        }
+        let mut shifted = heapless::HistoryBuf::<StateVec<T>, { MAX_DELAY_STEPS + 1 }>::new();
+        for s in self.history.oldest_ordered() {
+            let mut n = s + dx;
+            for v in n.iter_mut().skip(ROLL) {
+                *v = wrap_pi(*v);
+            }
+            shifted.write(n);
+        }
+        self.history = shifted;
     }
 
     /// Row scale that turns a raw innovation into a window sample.
@@ -407,6 +422,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
     }
 
+    #[inline(never)] // own stack frame and one copy (issue 17)
     fn after_update(&mut self, health: &Health) {
         let dt_learn = self.phase_time - self.learn_clock;
         self.learn_clock = self.phase_time;
@@ -555,6 +571,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
     }
 
+    #[inline(never)] // own stack frame and one copy (issue 17)
     fn compose(&self, imu: &ImuVec<T>, health: Health, updated: bool) -> Report<T> {
         let mut r = self.report;
         r.phase = self.phase;

@@ -384,6 +384,15 @@ fn profile() {
         "process noise Q",
         discrete_process_noise_from(&a, &b, &ImuNoisePsd::uniform(6e-5, 2e-7), 0.01)
     );
+    cost!(
+        "process noise Q structured",
+        imu_fdi::model::discrete_process_noise_structured(
+            &a,
+            &b,
+            &ImuNoisePsd::uniform(6e-5, 2e-7),
+            0.01
+        )
+    );
     let _ = cost!("cholesky 6x6", cholesky(&p));
     let _ = cost!("nalgebra Cholesky 6x6", nalgebra::Cholesky::new(p));
     let _ = cost!(
@@ -422,6 +431,16 @@ fn profile() {
     let _ = cost!(
         "ukf.predict (model.step)",
         ukf.predict(|s| m.step(s, &u, 0.01), &p)
+    );
+    let _ = cost!(
+        "ukf.predict_split (model)",
+        ukf.predict_split(
+            &VehicleModel::<f32>::SPLIT_ORDER,
+            VehicleModel::<f32>::NONLINEAR_STATES,
+            |s| m.step(s, &u, 0.01),
+            |d| m.step_deviation(d, &u, 0.01),
+            &p
+        )
     );
     let _ = cost!(
         "ukf.predict (identity)",
@@ -475,6 +494,17 @@ fn profile() {
         "two-stage predict",
         ts.predict(|s| m.step(s, &u, 0.01), &a, &b, &p)
     );
+    let _ = cost!(
+        "two-stage predict_split",
+        ts.predict_split(
+            &VehicleModel::<f32>::SPLIT_ORDER,
+            VehicleModel::<f32>::NONLINEAR_STATES,
+            |s| m.step(s, &u, 0.01),
+            |d| m.step_deviation(d, &u, 0.01),
+            |v| a * v + b,
+            &p
+        )
+    );
     let m2 = MeasurementModel::<f32>::new(AidingKind::GnssAttitude);
     let hj = m2.jacobian(&x, &omega);
     let _ = cost!(
@@ -489,6 +519,23 @@ fn profile() {
             &mut gate
         )
     );
+    let (order, nonlinear) = m2.split();
+    let _ = cost!(
+        "two-stage update_split (M2)",
+        ts.update_split(
+            &order,
+            nonlinear,
+            &z,
+            &[true; 6],
+            |s| Ok::<_, ()>(m2.predict(s, &omega)),
+            &hj,
+            &r,
+            &[false, false, false, true, true, true],
+            &mut gate
+        )
+    );
+    cost!("m2.predict", m2.predict(&x, &omega));
+    cost!("m2.jacobian", m2.jacobian(&x, &omega));
     let w = MeasVec::from_element(1e4f32);
     let _ = cost!("glr_isolate", glr_isolate(&a, &x, &w, 40.0, 0.02, 3));
     let _ = cost!(
