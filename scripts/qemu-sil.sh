@@ -44,14 +44,17 @@ field() { # field FILE REGEX: the first number captured by REGEX
 tt=target/qemu-target-tests.txt
 sm=target/qemu-sil-monitor.txt
 imu_fdi_bytes=$(arm-none-eabi-nm --size-sort -C -S --radix=d "$fw" | awk '$3 ~ /^[tTrR]$/ && /imu_fdi::/ { s += $2 } END { print s + 0 }')
-printf '{"ukf_step_mean":%s,"ukf_step_max":%s,"otsukf_step_mean":%s,"otsukf_step_max":%s,"parity_step_mean":%s,"parity_step_max":%s,"parity_config":%s,"stack_peak_bytes":%s,"firmware_flash_bytes":%s,"sil_flash_bytes":%s,"imu_fdi_flash_bytes":%s}\n' \
+printf '{"ukf_step_mean":%s,"ukf_step_max":%s,"otsukf_step_mean":%s,"otsukf_step_max":%s,"parity_step_mean":%s,"parity_step_max":%s,"parity_config":%s,"parity_flight_step_mean":%s,"parity_flight_step_max":%s,"parity_flight_config":%s,"stack_peak_bytes":%s,"firmware_flash_bytes":%s,"sil_flash_bytes":%s,"imu_fdi_flash_bytes":%s}\n' \
   "$(field "$sm" '^instructions per step: mean ([0-9]+) max [0-9]+.*')" \
   "$(field "$sm" '^instructions per step: mean [0-9]+ max ([0-9]+).*')" \
   "$(field "$tt" '^two-stage UKF monitor .*mean ([0-9]+) max [0-9]+ instructions.*')" \
   "$(field "$tt" '^two-stage UKF monitor .*mean [0-9]+ max ([0-9]+) instructions.*')" \
-  "$(field "$tt" '^parity monitor .*per step mean ([0-9]+) max [0-9]+.*')" \
-  "$(field "$tt" '^parity monitor .*per step mean [0-9]+ max ([0-9]+).*')" \
-  "$(field "$tt" '^parity monitor .*configuration ([0-9]+) instructions.*')" \
+  "$(field "$tt" '^parity monitor \(cone6.*per step mean ([0-9]+) max [0-9]+.*')" \
+  "$(field "$tt" '^parity monitor \(cone6.*per step mean [0-9]+ max ([0-9]+).*')" \
+  "$(field "$tt" '^parity monitor \(cone6.*configuration ([0-9]+) instructions.*')" \
+  "$(field "$tt" '^parity monitor for real flights .*per step mean ([0-9]+) max [0-9]+.*')" \
+  "$(field "$tt" '^parity monitor for real flights .*per step mean [0-9]+ max ([0-9]+).*')" \
+  "$(field "$tt" '^parity monitor for real flights .*configuration ([0-9]+) instructions.*')" \
   "$(field "$sm" '^peak stack: ([0-9]+) bytes.*')" \
   "$(flash "$fw")" \
   "$(field "$sm" '^image: flash ([0-9]+) bytes.*')" \
