@@ -17,6 +17,7 @@
 //! assert!((report.fused.unwrap() - rate).norm() < 1e-6);
 //! ```
 
+mod config;
 mod geometry;
 mod health;
 mod monitor;
@@ -25,11 +26,10 @@ mod space;
 mod training;
 mod validate;
 
+pub use config::{ParityConfig, ParityDetector};
 pub use geometry::{euler_rotation, yaw_rotation, Geometry};
 pub use health::{HealthConfig, Reading, SensorHealth, SensorStatus};
-pub use monitor::{
-    DetectorFlags, ParityConfig, ParityDetector, ParityMonitor, ParityPhase, ParityReport,
-};
+pub use monitor::{DetectorFlags, ParityMonitor, ParityPhase, ParityReport};
 pub use multiscale::{MultiscaleConfig, MultiscaleDecision, REGRESSORS, SCALES};
 pub use space::ParitySpace;
 pub use training::{Baseline, Trainer};

@@ -24,7 +24,7 @@ pub(crate) struct Args {
     /// simulator's white-noise χ²/CUSUM with calibrated thresholds).
     #[arg(long, default_value = "flight")]
     method: String,
-    /// One bias to inject: IMU,CHANNEL,SIZE,START[,END] (channel 0–5 =
+    /// One bias to inject: IMU,CHANNEL,SIZE,START or IMU,CHANNEL,SIZE,START,END (channel 0–5 =
     /// ax ay az gx gy gz; size in m/s² or °/s; times in s of the log).
     #[arg(long, value_delimiter = ',')]
     inject: Vec<f64>,

@@ -11,5 +11,6 @@ pub mod campaign;
 pub mod inject;
 pub mod parity_campaign;
 pub mod parity_replay;
+pub mod parity_tables;
 pub mod replay;
 pub mod stats_ci;

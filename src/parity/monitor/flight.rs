@@ -1,0 +1,169 @@
+//! The monitor's path for real flights: samples into blocks, the block's
+//! regressors (centred difference, per-sensor vibration), training and
+//! decisions of the multi-scale tests, isolation by their verdict.
+
+use nalgebra::{SVector, Vector3};
+
+use crate::math::Real;
+
+use super::super::multiscale::{Multiscale, MultiscaleDecision, REGRESSORS};
+use super::{ParityMonitor, ParityReport};
+
+/// Sums over the block being accumulated for the multi-scale tests.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct BlockSums<T: Real, const N: usize> {
+    p: SVector<T, N>,
+    x: Vector3<T>,
+    /// First sample of the block, the sensors' sums are centred on.
+    m0: Option<SVector<T, N>>,
+    m: SVector<T, N>,
+    mm: SVector<T, N>,
+    n: u16,
+}
+
+impl<T: Real, const N: usize> Default for BlockSums<T, N> {
+    fn default() -> Self {
+        Self {
+            p: SVector::zeros(),
+            x: Vector3::zeros(),
+            m0: None,
+            m: SVector::zeros(),
+            mm: SVector::zeros(),
+            n: 0,
+        }
+    }
+}
+
+impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
+    /// Accumulates one sample into the multi-scale block; a complete block
+    /// processes the one before it (whose centred difference is now known).
+    pub(super) fn multiscale_sample(
+        &mut self,
+        m: &SVector<T, N>,
+        p: &SVector<T, N>,
+        x: &Vector3<T>,
+        report: &mut ParityReport<T, N>,
+    ) {
+        let b = &mut self.ms_block;
+        // Centre the sensor sums on the block's first sample so the f32
+        // variance is not the difference of two large numbers.
+        let m0 = *b.m0.get_or_insert(*m);
+        let dm = m - m0;
+        b.p += p;
+        b.x += x;
+        b.m += dm;
+        b.mm += dm.component_mul(&dm);
+        b.n = b.n.saturating_add(1);
+        if b.n < self.cfg.block_len {
+            return;
+        }
+        let n = T::lit(f64::from(b.n));
+        let (pb, xb) = (b.p / n, b.x / n);
+        let mean = b.m / n;
+        let eb = (b.mm / n - mean.component_mul(&mean)).map(|v| v.max(T::zero()));
+        self.ms_block = BlockSums::default();
+        if let (Some((p_prev, x_prev, e_prev)), Some(x_before)) = (self.ms_prev, self.ms_prev2) {
+            let dx = (xb - x_before) * T::lit(0.5);
+            self.multiscale_block(&p_prev, &x_prev, &dx, &e_prev, report);
+        }
+        self.ms_prev2 = self.ms_prev.map(|(_, x, _)| x);
+        self.ms_prev = Some((pb, xb, eb));
+    }
+
+    /// One block through the multi-scale tests: training (first two thirds
+    /// calibrate, the last third measures the residual's covariance), then
+    /// a decision per block, with isolation after `isolate_after` agreeing
+    /// decisions whose hypothesis beats the runner-up by the margin.
+    fn multiscale_block(
+        &mut self,
+        p: &SVector<T, N>,
+        x: &Vector3<T>,
+        dx: &Vector3<T>,
+        e: &SVector<T, N>,
+        report: &mut ParityReport<T, N>,
+    ) {
+        let train_blocks = (self.cfg.train_samples / u32::from(self.cfg.block_len.max(1))).max(12);
+        let cfg = self.cfg.multiscale;
+        let v = *self.space.v();
+        let active = *self.space.active();
+        let Some(ms) = self.ms.as_mut() else {
+            return;
+        };
+        // Sensors out of the set may read anything: no vibration regressor.
+        let e = SVector::<T, N>::from_fn(|i, _| {
+            if active.get(i).copied().unwrap_or(false) {
+                e.get(i).copied().unwrap_or(T::zero())
+            } else {
+                T::zero()
+            }
+        });
+        let phi: SVector<T, REGRESSORS> = ms.regressor(x, dx, &e);
+        if !self.ms_trained {
+            self.ms_blocks = self.ms_blocks.saturating_add(1);
+            if self.ms_blocks <= train_blocks * 2 / 3 {
+                ms.learn_calibration(p, &phi, false);
+                return;
+            }
+            if let Some(r) = ms.residual(p, &phi) {
+                ms.train_residual(&r, &phi);
+            }
+            ms.learn_calibration(p, &phi, false);
+            if self.ms_blocks >= train_blocks {
+                if ms.finish_training(train_blocks).is_some() {
+                    self.ms_trained = true;
+                } else {
+                    // Degenerate training data: start again.
+                    *ms = Multiscale::new(cfg, self.space.dim(), ms.threshold_set());
+                    self.ms_blocks = 0;
+                }
+            }
+            return;
+        }
+        let Some(r) = ms.residual(p, &phi) else {
+            return;
+        };
+        let mut d = ms.decide(p, &phi, &r, &v, &active);
+        // A relative bias the calibration holds beyond the offset limit is
+        // a fault present since power-up (or since training).
+        if d.ratio <= T::one() {
+            if let Some((k, bias, margin)) = ms.offset_fault(&v, &active) {
+                d = MultiscaleDecision {
+                    ratio: T::one() + T::lit(1e-3),
+                    scale: 0,
+                    suspect: Some(k),
+                    bias,
+                    margin,
+                    isolate: Some((k, margin)),
+                    learning: false,
+                };
+            }
+        }
+        report.decision = true;
+        report.multiscale = d;
+        report.fault = d.ratio > T::one();
+        report.suspect = d.suspect;
+        report.bias_estimate = d.bias;
+        let candidate = d
+            .isolate
+            .filter(|(k, m)| report.fault && *m >= cfg.isolation_margin && self.space.isolable(*k))
+            .map(|(k, _)| k);
+        let Some(k) = candidate else {
+            if !report.fault {
+                self.suspect_run = (None, 0);
+            }
+            return;
+        };
+        self.suspect_run = match self.suspect_run {
+            (Some(j), n) if j == k => (Some(k), n.saturating_add(1)),
+            _ => (Some(k), 1),
+        };
+        if self.suspect_run.1 >= self.cfg.isolate_after {
+            if let Some(h) = self.health.get_mut(k) {
+                h.isolate();
+            }
+            self.exclude(k);
+            report.isolated = Some(k);
+            report.fault = false;
+        }
+    }
+}

@@ -1,0 +1,437 @@
+//! The redundant-sensor monitor: hardware checks, training, the paper's PCA
+//! pattern test, a windowed χ² (GLT) test, per-sensor CUSUMs, isolation by
+//! fault direction and reconfiguration, with the fused output every period.
+
+use nalgebra::{SVector, Vector3};
+
+use crate::math::Real;
+use crate::stats::chi_square_upper_quantile;
+
+use super::config::{ParityConfig, ParityDetector};
+use super::health::{Reading, SensorHealth, SensorStatus};
+use super::multiscale::{Multiscale, MultiscaleDecision};
+use super::space::invert_rank3;
+use super::training::{Baseline, Trainer};
+use super::{ConfigError, Geometry, ParitySpace};
+
+mod flight;
+mod white;
+
+use flight::BlockSums;
+use white::{derive_tests, Tests};
+
+/// Monitor phase.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ParityPhase {
+    /// Learning offset, leakage and noise; no decisions.
+    Training,
+    /// Running the tests fault-free to calibrate their thresholds; no
+    /// alarms.
+    Calibrating,
+    /// Testing every block.
+    Monitoring,
+    /// Three or fewer healthy sensors remain: fusing without monitoring.
+    NoRedundancy,
+    /// Fewer than three usable sensors, or their geometry lost rank.
+    Lost,
+}
+
+/// Alarm state of each test at the latest decision.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DetectorFlags {
+    /// PCA pattern test.
+    pub pca: bool,
+    /// Windowed χ² test.
+    pub glt: bool,
+    /// Any CUSUM.
+    pub cusum: bool,
+}
+
+/// What the monitor says every period.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParityReport<T: Real, const N: usize> {
+    /// Phase.
+    pub phase: ParityPhase,
+    /// Least-squares body vector from the sensors usable this period
+    /// (`None` when fewer than three independent ones are).
+    pub fused: Option<Vector3<T>>,
+    /// Health of each sensor this period.
+    pub status: [SensorStatus; N],
+    /// A new decision was taken this period (one per block).
+    pub decision: bool,
+    /// Alarm of each test at the latest decision.
+    pub flags: DetectorFlags,
+    /// The configured detector alarms.
+    pub fault: bool,
+    /// χ² statistic of the window and its threshold.
+    pub glt: T,
+    /// Threshold of [`glt`](Self::glt).
+    pub glt_threshold: T,
+    /// \[PAR\] pattern mean `Wᵀ p̄` (unit of the sensors).
+    pub pattern: [T; 2],
+    /// Normalised pattern statistic and its threshold.
+    pub pca: T,
+    /// Threshold of [`pca`](Self::pca).
+    pub pca_threshold: T,
+    /// Largest CUSUM ÷ its threshold (alarm above 1).
+    pub cusum_ratio: T,
+    /// Sensor whose fault direction best explains the window mean.
+    pub suspect: Option<usize>,
+    /// Least-squares bias of the suspect (unit).
+    pub bias_estimate: T,
+    /// Sensor isolated and removed in this period.
+    pub isolated: Option<usize>,
+    /// At least half of the sensors still in the set clip this period: a
+    /// common-mode saturation (violent manoeuvre, crash), not a sensor fault.
+    pub common_mode_saturation: bool,
+    /// Parity dimension in use.
+    pub parity_dim: usize,
+    /// Latest decision of the multi-scale tests (ratio to threshold,
+    /// suspect, bias, isolation margin).
+    pub multiscale: MultiscaleDecision<T>,
+}
+
+/// Parity-space monitor of `N` redundant single-axis sensors of one kind,
+/// with a window of up to `W` blocks. Allocation-free and panic-free.
+#[derive(Debug, Clone)]
+pub struct ParityMonitor<T: Real, const N: usize, const W: usize> {
+    cfg: ParityConfig<T>,
+    space: ParitySpace<T, N>,
+    health: [SensorHealth<T>; N],
+    trainer: Trainer<T, N>,
+    tests: Option<Tests<T, N>>,
+    phase: ParityPhase,
+    block: SVector<T, N>,
+    block_n: u16,
+    window: [SVector<T, N>; W],
+    head: usize,
+    filled: usize,
+    cusum_pos: [T; N],
+    cusum_neg: [T; N],
+    suspect_run: (Option<usize>, u16),
+    removed: [bool; N],
+    /// Threshold factors `[GLT, PCA, CUSUM]` from calibration.
+    scales: [T; 3],
+    /// Largest statistic ÷ threshold seen in calibration, same order.
+    peaks: [T; 3],
+    calibrated: u32,
+    /// χ² quantiles at `false_alarm` by degrees of freedom (index), computed
+    /// once at configuration: reconfiguring in flight then costs no
+    /// software-`f64` root finding.
+    chi2: [T; N],
+    last: ParityReport<T, N>,
+    /// Multi-scale tests (with [`ParityDetector::Multiscale`]).
+    ms: Option<Multiscale<T, N, W>>,
+    /// Block being accumulated for them.
+    ms_block: BlockSums<T, N>,
+    /// The previous block (`p̄`, `x̄`, per-sensor variance) and the fused
+    /// mean before it: a block is processed when the next one is complete,
+    /// so its skew regressor is the centred difference.
+    ms_prev: Option<(SVector<T, N>, Vector3<T>, SVector<T, N>)>,
+    ms_prev2: Option<Vector3<T>>,
+    /// Blocks seen since (re)training began.
+    ms_blocks: u32,
+    ms_trained: bool,
+}
+
+impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
+    /// A monitor of the array `geometry`. Errors: rank-deficient geometry,
+    /// fewer than four sensors, a window longer than `W` or zero, a bad
+    /// false-alarm probability.
+    pub fn new(geometry: &Geometry<T, N>, cfg: ParityConfig<T>) -> Result<Self, ConfigError> {
+        cfg.validate()?;
+        if cfg.window_blocks == 0 || cfg.window_blocks > W || cfg.block_len == 0 {
+            return Err(ConfigError::Window);
+        }
+        if cfg.detector == ParityDetector::Multiscale && cfg.multiscale.check(W).is_err() {
+            return Err(ConfigError::Multiscale);
+        }
+        if !(cfg.false_alarm > 0.0 && cfg.false_alarm < 0.5)
+            || cfg.cusum_arl0.is_nan()
+            || cfg.cusum_arl0 <= 1.0
+        {
+            return Err(ConfigError::Probability);
+        }
+        let space = ParitySpace::new(geometry, &[true; N])?;
+        let mut chi2 = [T::zero(); N];
+        // The χ² table serves the white-noise tests only; the multi-scale
+        // tests have their own thresholds (and the table costs ≈ 2.6 M
+        // instructions of software f64 on the M4F).
+        let white = cfg.detector != ParityDetector::Multiscale;
+        for (dof, q) in chi2.iter_mut().enumerate().skip(1).filter(|_| white) {
+            let x = chi_square_upper_quantile(cfg.false_alarm, dof as u32)
+                .map_err(|_| ConfigError::Probability)?;
+            *q = T::lit(x);
+        }
+        let report = ParityReport {
+            phase: ParityPhase::Training,
+            fused: None,
+            status: [SensorStatus::Healthy; N],
+            decision: false,
+            flags: DetectorFlags::default(),
+            fault: false,
+            glt: T::zero(),
+            glt_threshold: T::zero(),
+            pattern: [T::zero(); 2],
+            pca: T::zero(),
+            pca_threshold: T::zero(),
+            cusum_ratio: T::zero(),
+            suspect: None,
+            bias_estimate: T::zero(),
+            isolated: None,
+            common_mode_saturation: false,
+            parity_dim: space.dim(),
+            multiscale: MultiscaleDecision::default(),
+        };
+        Self {
+            trainer: Trainer::new(cfg.train_samples, cfg.block_len, cfg.ridge),
+            cfg,
+            space,
+            health: [SensorHealth::default(); N],
+            tests: None,
+            phase: ParityPhase::Training,
+            block: SVector::zeros(),
+            block_n: 0,
+            window: [SVector::zeros(); W],
+            head: 0,
+            filled: 0,
+            cusum_pos: [T::zero(); N],
+            cusum_neg: [T::zero(); N],
+            suspect_run: (None, 0),
+            removed: [false; N],
+            scales: [T::one(); 3],
+            peaks: [T::zero(); 3],
+            calibrated: 0,
+            chi2,
+            last: report,
+            ms: None,
+            ms_block: BlockSums::default(),
+            ms_prev: None,
+            ms_prev2: None,
+            ms_blocks: 0,
+            ms_trained: false,
+        }
+        .with_multiscale()
+    }
+
+    /// Creates the multi-scale tests when they are the detector (their
+    /// thresholds are computed here, once).
+    fn with_multiscale(mut self) -> Result<Self, ConfigError> {
+        if self.cfg.detector == ParityDetector::Multiscale {
+            let h = Multiscale::<T, N, W>::thresholds(&self.cfg.multiscale)
+                .ok_or(ConfigError::Multiscale)?;
+            self.ms = Some(Multiscale::new(self.cfg.multiscale, self.space.dim(), h));
+        }
+        Ok(self)
+    }
+
+    /// Back to training with every sensor healthy (an explicit reset after
+    /// maintenance; latched failures clear).
+    pub fn reset(&mut self) -> Result<(), ConfigError> {
+        *self = Self::new(self.space.geometry(), self.cfg)?;
+        Ok(())
+    }
+
+    /// The parity space in use (after any reconfiguration).
+    pub fn space(&self) -> &ParitySpace<T, N> {
+        &self.space
+    }
+
+    /// What training learned (in the current space), once trained.
+    pub fn baseline(&self) -> Option<&Baseline<T, N>> {
+        self.tests.as_ref().map(|t| &t.baseline)
+    }
+
+    /// Current phase.
+    pub fn phase(&self) -> ParityPhase {
+        self.phase
+    }
+
+    /// One period: checks each reading, fuses the usable ones, and — when
+    /// every active sensor delivered a usable sample — trains or tests.
+    pub fn step(&mut self, readings: &[Reading<T>; N]) -> ParityReport<T, N> {
+        let mut m = SVector::<T, N>::zeros();
+        let mut usable = [false; N];
+        let mut status = [SensorStatus::Healthy; N];
+        let mut newly_failed = None;
+        for (k, (reading, health)) in readings.iter().zip(self.health.iter_mut()).enumerate() {
+            let was_failed = health.failure().is_some();
+            let (value, s) = health.check(*reading, &self.cfg.health);
+            if let (Some(x), Some(slot), Some(u)) = (value, m.get_mut(k), usable.get_mut(k)) {
+                *slot = x;
+                *u = true;
+            }
+            if let Some(st) = status.get_mut(k) {
+                *st = s;
+            }
+            if !was_failed && s.is_failed() && newly_failed.is_none() {
+                newly_failed = Some(k);
+            }
+        }
+        // Railed outputs: long clipping on a minority of sensors.
+        let in_set = self.removed.iter().filter(|r| !**r).count();
+        let clipping = status
+            .iter()
+            .filter(|s| **s == SensorStatus::Clipping)
+            .count();
+        let common_mode = in_set > 0 && 2 * clipping >= in_set;
+        for (k, (h, st)) in self.health.iter_mut().zip(status.iter_mut()).enumerate() {
+            if !common_mode
+                && h.clipping_run() >= self.cfg.health.rail_samples
+                && h.failure().is_none()
+            {
+                h.rail();
+                *st = SensorStatus::Railed;
+                newly_failed = newly_failed.or(Some(k));
+            }
+        }
+        let mut report = self.last;
+        report.decision = false;
+        report.isolated = None;
+        report.common_mode_saturation = common_mode;
+        if let Some(k) = newly_failed {
+            self.exclude(k);
+        }
+        // A failed sensor stays failed even if another one failed first.
+        for k in 0..N {
+            let latched = self.health.get(k).and_then(|h| h.failure());
+            if latched.is_some() && !self.removed.get(k).copied().unwrap_or(true) {
+                self.exclude(k);
+            }
+        }
+        report.fused = fuse_subset(self.space.geometry(), &m, &usable);
+        let all_active_usable = self
+            .space
+            .active()
+            .iter()
+            .zip(usable.iter())
+            .all(|(a, u)| !a || *u);
+        if all_active_usable
+            && matches!(
+                self.phase,
+                ParityPhase::Training | ParityPhase::Calibrating | ParityPhase::Monitoring
+            )
+        {
+            let p = self.space.parity(&m);
+            let x = self.space.fuse(&m);
+            if self.ms.is_some() {
+                // The multi-scale tests alone: the white-noise tests would
+                // only cost time (their statistics are not reported).
+                self.multiscale_sample(&m, &p, &x, &mut report);
+                if self.ms_trained && self.phase == ParityPhase::Training {
+                    self.phase = ParityPhase::Monitoring;
+                }
+            } else {
+                match self.phase {
+                    ParityPhase::Training => self.train(&p, &x),
+                    _ => self.monitor(&p, &x, &mut report),
+                }
+            }
+        }
+        report.phase = self.phase;
+        if self.ms.is_some() && !self.ms_trained && self.phase == ParityPhase::Monitoring {
+            // The multi-scale tests are still learning: cannot judge yet.
+            report.phase = ParityPhase::Training;
+        }
+        report.status = status;
+        report.parity_dim = self.space.dim();
+        if let Some(t) = &self.tests {
+            report.glt_threshold = t.glt_threshold;
+            report.pca_threshold = t.pca_threshold;
+        }
+        self.last = report;
+        report
+    }
+
+    /// Threshold factors `[GLT, PCA, CUSUM]` set by calibration (1 = the
+    /// χ²/ARL thresholds held).
+    pub fn threshold_scales(&self) -> [T; 3] {
+        self.scales
+    }
+
+    /// Removes sensor `k` from the set and carries the learned baseline
+    /// into the reduced parity space.
+    fn exclude(&mut self, k: usize) {
+        match self.removed.get_mut(k) {
+            Some(r) if !*r => *r = true,
+            _ => return,
+        }
+        let active: [bool; N] =
+            core::array::from_fn(|i| !self.removed.get(i).copied().unwrap_or(true));
+        self.block = SVector::zeros();
+        self.block_n = 0;
+        self.filled = 0;
+        self.head = 0;
+        self.cusum_pos = [T::zero(); N];
+        self.cusum_neg = [T::zero(); N];
+        self.suspect_run = (None, 0);
+        self.ms_block = BlockSums::default();
+        self.ms_prev = None;
+        self.ms_prev2 = None;
+        match self.space.without(k) {
+            Ok(sub) => {
+                let c = self.space.transition_to(&sub);
+                if let Some(ms) = self.ms.as_mut() {
+                    if self.ms_trained {
+                        ms.transform(&c, sub.dim());
+                    } else {
+                        // Failed while training: train the reduced set.
+                        *ms = Multiscale::new(self.cfg.multiscale, sub.dim(), ms.threshold_set());
+                        self.ms_blocks = 0;
+                    }
+                }
+                if let Some(t) = self.tests {
+                    let b = Baseline {
+                        offset: c * t.baseline.offset,
+                        leak: c * t.baseline.leak,
+                        block_cov: c * t.baseline.block_cov * c.transpose(),
+                        correlation_factor: t.baseline.correlation_factor,
+                    };
+                    self.tests = derive_tests(&sub, b, &self.cfg, &self.scales, &self.chi2);
+                    if self.tests.is_none() {
+                        self.phase = ParityPhase::Lost;
+                    }
+                } else {
+                    // Failed during training: start training the reduced set.
+                    self.trainer =
+                        Trainer::new(self.cfg.train_samples, self.cfg.block_len, self.cfg.ridge);
+                }
+                self.space = sub;
+            }
+            Err(_) => {
+                let usable = active.iter().filter(|a| **a).count();
+                let rank_ok = usable >= 3
+                    && fuse_subset(self.space.geometry(), &SVector::zeros(), &active).is_some();
+                self.phase = if rank_ok {
+                    ParityPhase::NoRedundancy
+                } else {
+                    ParityPhase::Lost
+                };
+                // No parity space is left; fusion uses the health masks.
+                self.tests = None;
+                self.ms = None;
+            }
+        }
+    }
+}
+
+/// Least squares over the sensors marked usable; `None` below rank 3.
+fn fuse_subset<T: Real, const N: usize>(
+    geometry: &Geometry<T, N>,
+    m: &SVector<T, N>,
+    usable: &[bool; N],
+) -> Option<Vector3<T>> {
+    let mut g = nalgebra::Matrix3::<T>::zeros();
+    let mut hm = Vector3::<T>::zeros();
+    for (k, u) in usable.iter().enumerate() {
+        if !u {
+            continue;
+        }
+        let h = geometry.direction(k)?;
+        g += h * h.transpose();
+        hm += h * m.get(k).copied().unwrap_or(T::zero());
+    }
+    invert_rank3(&g).map(|inv| inv * hm)
+}

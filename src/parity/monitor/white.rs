@@ -1,0 +1,373 @@
+//! The monitor's white-noise tests (SPEC §7, [PAR]): training of offset,
+//! leakage and noise, threshold calibration, the PCA pattern, windowed χ²
+//! (GLT) and per-sensor CUSUM tests, and isolation by fault direction.
+
+use nalgebra::{SMatrix, SVector, Vector3};
+
+use crate::math::{cholesky, cholesky_solve_right, symmetric_eigen, Real};
+use crate::stats::cusum_threshold;
+
+use super::super::config::{ParityConfig, ParityDetector};
+use super::super::space::ParitySpace;
+use super::super::training::{Baseline, Trainer};
+use super::{DetectorFlags, ParityMonitor, ParityPhase, ParityReport};
+
+/// Derived per-space quantities (recomputed on reconfiguration).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Tests<T: Real, const N: usize> {
+    pub(super) baseline: Baseline<T, N>,
+    /// `Σ_b⁻¹` (identity block beyond `dim`, then zeroed).
+    pub(super) cov_inv: SMatrix<T, N, N>,
+    /// Column k: `a_k = Σ_b⁻¹ v_k`.
+    pub(super) a: SMatrix<T, N, N>,
+    /// `q_k = v_kᵀ Σ_b⁻¹ v_k`.
+    pub(super) q: [T; N],
+    pub(super) glt_threshold: T,
+    pub(super) pca_basis: SMatrix<T, N, 2>,
+    pub(super) pca_var: [T; 2],
+    pub(super) pca_threshold: T,
+    pub(super) kappa: [T; N],
+    pub(super) cusum_h: [T; N],
+}
+
+impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
+    pub(super) fn train(&mut self, p: &SVector<T, N>, x: &Vector3<T>) {
+        self.trainer.add(p, x);
+        if !self.trainer.done() {
+            return;
+        }
+        match self
+            .trainer
+            .finish()
+            .and_then(|b| derive_tests(&self.space, b, &self.cfg, &self.scales, &self.chi2))
+        {
+            Some(t) => {
+                self.tests = Some(t);
+                self.phase = if self.cfg.calibrate_samples > 0 {
+                    ParityPhase::Calibrating
+                } else {
+                    ParityPhase::Monitoring
+                };
+            }
+            // Non-finite training data: train again rather than test with it.
+            None => {
+                self.trainer =
+                    Trainer::new(self.cfg.train_samples, self.cfg.block_len, self.cfg.ridge)
+            }
+        }
+    }
+
+    pub(super) fn monitor(
+        &mut self,
+        p: &SVector<T, N>,
+        x: &Vector3<T>,
+        report: &mut ParityReport<T, N>,
+    ) {
+        let Some(t) = self.tests else {
+            return;
+        };
+        let r = p - t.baseline.leak * x - t.baseline.offset;
+        self.block += r;
+        self.block_n = self.block_n.saturating_add(1);
+        if self.block_n < self.cfg.block_len {
+            return;
+        }
+        let b = self.block / T::lit(f64::from(self.cfg.block_len));
+        self.block = SVector::zeros();
+        self.block_n = 0;
+        if let Some(slot) = self.window.get_mut(self.head) {
+            *slot = b;
+        }
+        let k_win = self.cfg.window_blocks;
+        self.head = (self.head + 1) % k_win;
+        self.filled = (self.filled + 1).min(k_win);
+        report.decision = true;
+
+        // CUSUMs: per sensor direction, on the standardised block projection.
+        let mut cusum_ratio = T::zero();
+        let mut cusum_arg = None;
+        for k in 0..N {
+            let (Some(&q), Some(&kappa), Some(&h)) = (t.q.get(k), t.kappa.get(k), t.cusum_h.get(k))
+            else {
+                continue;
+            };
+            if q <= T::zero() || h <= T::zero() {
+                continue;
+            }
+            let s = t.a.column(k).dot(&b) / q.sqrt();
+            let (Some(gp), Some(gn)) = (self.cusum_pos.get_mut(k), self.cusum_neg.get_mut(k))
+            else {
+                continue;
+            };
+            *gp = (*gp + s - kappa).max(T::zero());
+            *gn = (*gn - s - kappa).max(T::zero());
+            let ratio = gp.max(*gn) / h;
+            if !ratio.finite() {
+                *gp = T::zero();
+                *gn = T::zero();
+                continue;
+            }
+            if ratio > cusum_ratio {
+                cusum_ratio = ratio;
+                cusum_arg = Some(k);
+            }
+        }
+        report.cusum_ratio = cusum_ratio;
+        report.flags.cusum = cusum_ratio > T::one();
+
+        // Window tests once the window is full.
+        let mut mean = SVector::<T, N>::zeros();
+        if self.filled >= k_win {
+            for w in self.window.iter().take(k_win) {
+                mean += w;
+            }
+            mean /= T::lit(k_win as f64);
+            let kf = T::lit(k_win as f64);
+            report.glt = kf * mean.dot(&(t.cov_inv * mean));
+            report.flags.glt = report.glt > t.glt_threshold;
+            let y = t.pca_basis.transpose() * mean;
+            report.pattern = [y.x, y.y];
+            let mut pca = T::zero();
+            for (yi, vi) in y.iter().zip(t.pca_var.iter()) {
+                if *vi > T::zero() {
+                    pca += *yi * *yi / *vi;
+                }
+            }
+            report.pca = kf * pca;
+            report.flags.pca = report.pca > t.pca_threshold;
+            if !report.glt.finite() || !report.pca.finite() {
+                // Cannot happen with finite samples; never let NaN decide.
+                report.flags.glt = false;
+                report.flags.pca = false;
+                self.filled = 0;
+            }
+        }
+        if self.phase == ParityPhase::Calibrating {
+            self.calibrate(&t, &b, report);
+            return;
+        }
+        let fault = match self.cfg.detector {
+            ParityDetector::Pca => report.flags.pca,
+            ParityDetector::Glt => report.flags.glt,
+            ParityDetector::Cusum => report.flags.cusum,
+            ParityDetector::GltOrCusum => report.flags.glt || report.flags.cusum,
+            // Decided per block in `multiscale_block`.
+            ParityDetector::Multiscale => return,
+        };
+        report.fault = fault;
+
+        // Isolation: the direction that explains the window mean best (or,
+        // before the window fills, the CUSUM that fired).
+        let basis = if self.filled >= k_win { mean } else { b };
+        let (suspect, bias) = isolate(&t, &basis, self.space.active());
+        report.suspect = if self.filled >= k_win {
+            suspect
+        } else {
+            cusum_arg.or(suspect)
+        };
+        report.bias_estimate = bias;
+
+        if !fault {
+            self.suspect_run = (None, 0);
+            let quiet = report.glt < t.glt_threshold * T::lit(0.5) && cusum_ratio < T::lit(0.5);
+            if quiet && self.cfg.drift_blocks > T::one() {
+                // Follow slow bias drift (within the bias-instability spec).
+                let gain = T::one() / self.cfg.drift_blocks;
+                if let Some(tests) = self.tests.as_mut() {
+                    tests.baseline.offset += b * gain;
+                }
+            }
+            return;
+        }
+        let Some(k) = report.suspect else {
+            return;
+        };
+        if !self.space.isolable(k) {
+            // Detect-only geometry (e.g. two aligned triads): say so by not
+            // isolating; `fault` stays raised.
+            self.suspect_run = (None, 0);
+            return;
+        }
+        self.suspect_run = match self.suspect_run {
+            (Some(j), n) if j == k => (Some(k), n.saturating_add(1)),
+            _ => (Some(k), 1),
+        };
+        if self.suspect_run.1 >= self.cfg.isolate_after {
+            if let Some(h) = self.health.get_mut(k) {
+                h.isolate();
+            }
+            self.exclude(k);
+            report.isolated = Some(k);
+            report.fault = false;
+            report.flags = DetectorFlags::default();
+        }
+    }
+
+    /// One calibration decision: records each statistic against its
+    /// threshold, raises no alarm; at the end scales the thresholds.
+    fn calibrate(
+        &mut self,
+        t: &Tests<T, N>,
+        block: &SVector<T, N>,
+        report: &mut ParityReport<T, N>,
+    ) {
+        let ratios = [
+            report.glt / t.glt_threshold,
+            if t.pca_threshold > T::zero() {
+                report.pca / t.pca_threshold
+            } else {
+                T::zero()
+            },
+            report.cusum_ratio,
+        ];
+        for (p, r) in self.peaks.iter_mut().zip(ratios.iter()) {
+            if r.finite() && *r > *p {
+                *p = *r;
+            }
+        }
+        report.flags = DetectorFlags::default();
+        report.fault = false;
+        // Follow drift during calibration too (the offset keeps learning).
+        if self.cfg.drift_blocks > T::one() {
+            let gain = T::one() / self.cfg.drift_blocks;
+            if let Some(tests) = self.tests.as_mut() {
+                tests.baseline.offset += block * gain;
+            }
+        }
+        self.calibrated = self
+            .calibrated
+            .saturating_add(u32::from(self.cfg.block_len));
+        if self.calibrated < self.cfg.calibrate_samples {
+            return;
+        }
+        for (s, p) in self.scales.iter_mut().zip(self.peaks.iter()) {
+            *s = (*p * T::lit(1.25)).max(T::one());
+        }
+        let baseline = self.tests.map(|t| t.baseline);
+        self.tests = baseline
+            .and_then(|b| derive_tests(&self.space, b, &self.cfg, &self.scales, &self.chi2));
+        self.phase = if self.tests.is_some() {
+            ParityPhase::Monitoring
+        } else {
+            ParityPhase::Lost
+        };
+        self.filled = 0;
+        self.head = 0;
+        self.cusum_pos = [T::zero(); N];
+        self.cusum_neg = [T::zero(); N];
+    }
+}
+
+/// Builds every threshold and projection for `space` from `baseline`.
+pub(super) fn derive_tests<T: Real, const N: usize>(
+    space: &ParitySpace<T, N>,
+    baseline: Baseline<T, N>,
+    cfg: &ParityConfig<T>,
+    scales: &[T; 3],
+    chi2: &[T; N],
+) -> Option<Tests<T, N>> {
+    let [glt_scale, pca_scale, cusum_scale] = *scales;
+    let dim = space.dim();
+    if dim == 0 {
+        return None;
+    }
+    // Pad the unused block with identity so the factorisation is full rank.
+    let padded = SMatrix::<T, N, N>::from_fn(|i, j| {
+        if i < dim && j < dim {
+            at(&baseline.block_cov, i, j)
+        } else if i == j {
+            T::one()
+        } else {
+            T::zero()
+        }
+    });
+    let l = cholesky(&padded).ok()?;
+    let mut cov_inv = cholesky_solve_right(&l, &SMatrix::<T, N, N>::identity());
+    let mut a = cholesky_solve_right(&l, &space.v().transpose()).transpose();
+    for i in dim..N {
+        cov_inv.row_mut(i).fill(T::zero());
+        cov_inv.column_mut(i).fill(T::zero());
+        a.row_mut(i).fill(T::zero());
+    }
+    let q: [T; N] = core::array::from_fn(|k| {
+        if space.detectable(k) {
+            space.v().column(k).dot(&a.column(k))
+        } else {
+            T::zero()
+        }
+    });
+    let margin = cfg.threshold_margin;
+    let glt_threshold = *chi2.get(dim)? * margin * glt_scale;
+    let (values, vectors) = symmetric_eigen(&SMatrix::<T, N, N>::from_fn(|i, j| {
+        if i < dim && j < dim {
+            at(&baseline.block_cov, i, j)
+        } else {
+            T::zero()
+        }
+    }))?;
+    let pca_dims = dim.min(2);
+    let mut pca_basis = SMatrix::<T, N, 2>::zeros();
+    let mut pca_var = [T::zero(); 2];
+    for c in 0..pca_dims {
+        pca_basis.set_column(c, &vectors.column(c));
+        if let Some(v) = pca_var.get_mut(c) {
+            *v = values.get(c).copied().unwrap_or(T::zero());
+        }
+    }
+    let pca_threshold = *chi2.get(pca_dims)? * margin * pca_scale;
+    let mut kappa = [T::zero(); N];
+    let mut cusum_h = [T::zero(); N];
+    for k in 0..N {
+        let (Some(&qk), Some(kk), Some(hk)) = (q.get(k), kappa.get_mut(k), cusum_h.get_mut(k))
+        else {
+            continue;
+        };
+        if qk <= T::zero() {
+            continue;
+        }
+        // A bias b on sensor k shifts the standardised projection by b·√q_k.
+        let shift = (cfg.cusum_bias * qk.sqrt()).to_f64();
+        let kappa_k = 0.5 * shift;
+        *kk = T::lit(kappa_k);
+        *hk = T::lit(cusum_threshold(kappa_k, cfg.cusum_arl0).ok()?) * margin * cusum_scale;
+    }
+    Some(Tests {
+        baseline,
+        cov_inv,
+        a,
+        q,
+        glt_threshold,
+        pca_basis,
+        pca_var,
+        pca_threshold,
+        kappa,
+        cusum_h,
+    })
+}
+
+fn at<T: Real, const N: usize>(m: &SMatrix<T, N, N>, i: usize, j: usize) -> T {
+    m.get((i, j)).copied().unwrap_or(T::zero())
+}
+
+/// Sensor maximising `(a_kᵀ r)² / q_k` and its bias estimate `a_kᵀ r / q_k`.
+fn isolate<T: Real, const N: usize>(
+    t: &Tests<T, N>,
+    r: &SVector<T, N>,
+    active: &[bool; N],
+) -> (Option<usize>, T) {
+    let mut best = (None, T::zero(), T::zero());
+    for k in 0..N {
+        let (Some(&q), Some(&a)) = (t.q.get(k), active.get(k)) else {
+            continue;
+        };
+        if !a || q <= T::zero() {
+            continue;
+        }
+        let z = t.a.column(k).dot(r);
+        let score = z * z / q;
+        if score > best.1 {
+            best = (Some(k), score, z / q);
+        }
+    }
+    (best.0, best.2)
+}
