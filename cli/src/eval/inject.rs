@@ -38,7 +38,8 @@ pub struct FaultTable {
 impl FaultTable {
     /// Parses TOML; errors give the line and column.
     pub fn parse(text: &str) -> Result<Self> {
-        let t: Self = toml::from_str(text).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let t: Self =
+            toml::from_str(text).map_err(|e| crate::io::scenario_file::toml_error(text, &e))?;
         if t.faults.is_empty() {
             bail!("no [[faults]] rows");
         }

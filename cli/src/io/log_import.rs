@@ -82,6 +82,20 @@ pub fn quaternion_to_euler(q: [f64; 4]) -> [f64; 3] {
     [roll, pitch, yaw]
 }
 
+/// The text of a px4-ulog error: the crate wraps its parse errors in an
+/// `io::Error` formatted with `{:?}`; keep only their description.
+fn ulog_error_text(e: &std::io::Error) -> String {
+    let s = e.to_string();
+    match s.split_once("description: \"") {
+        Some((_, rest)) => rest
+            .rsplit_once('"')
+            .map_or(rest, |(d, _)| d)
+            .replace("\\\"", "\""),
+        None if s.contains('{') || s.contains("Some(") => format!("{:?}", e.kind()).to_lowercase(),
+        None => s,
+    }
+}
+
 /// Converts a `.ulg` to a SPEC §10 CSV at `out`.
 pub fn ulog_to_replay_csv(input: &Path, out: &Path) -> Result<ImportSummary> {
     let name = input
@@ -90,7 +104,13 @@ pub fn ulog_to_replay_csv(input: &Path, out: &Path) -> Result<ImportSummary> {
     // px4-ulog indexes slices with lengths read from the file and panics on
     // some corrupt files: the panic becomes an error naming the file.
     let parsed = match crate::io::guard::catch_quietly(|| read_file(name)) {
-        Ok(r) => r.with_context(|| format!("{}: not a readable ULog file", input.display()))?,
+        Ok(r) => r.map_err(|e| {
+            anyhow::anyhow!(
+                "{}: not a readable ULog file: {}",
+                input.display(),
+                ulog_error_text(&e)
+            )
+        })?,
         Err(why) => bail!(
             "{}: corrupt ULog: the parser failed ({why})",
             input.display()

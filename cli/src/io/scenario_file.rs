@@ -174,9 +174,32 @@ pub fn validate_scenario(scn: &Scenario) -> Result<()> {
 
 /// Parses scenario TOML and checks it ([`validate_scenario`]).
 pub fn parse_scenario(text: &str) -> Result<Scenario> {
-    let scn: Scenario = toml::from_str(text).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let scn: Scenario = toml::from_str(text).map_err(|e| toml_error(text, &e))?;
     validate_scenario(&scn)?;
     Ok(scn)
+}
+
+/// A TOML error on one line: `line L, column C: message` (the `toml`
+/// crate's `Display` adds the source line and a caret on lines of their own).
+pub fn toml_error(text: &str, e: &toml::de::Error) -> anyhow::Error {
+    let msg = e.message().split_whitespace().collect::<Vec<_>>().join(" ");
+    match e.span() {
+        Some(span) => {
+            let before = text.get(..span.start).unwrap_or(text);
+            let line = before.matches('\n').count() + 1;
+            let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+            let src: String = text
+                .lines()
+                .nth(line - 1)
+                .unwrap_or("")
+                .trim()
+                .chars()
+                .take(60)
+                .collect();
+            anyhow::anyhow!("line {line}, column {col} (`{src}`): {msg}")
+        }
+        None => anyhow::anyhow!("{msg}"),
+    }
 }
 
 /// A scenario as TOML text, with a header comment.
