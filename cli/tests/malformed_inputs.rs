@@ -25,6 +25,16 @@ fn data(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// Mutations per file are multiplied by `IMU_FDI_MUTATIONS` (default 1)
+/// for longer runs by hand.
+fn scaled(n: usize) -> usize {
+    n * std::env::var("IMU_FDI_MUTATIONS")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+        .unwrap_or(1)
+        .max(1)
+}
+
 fn tmp_dir(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("imu-fdi-malformed-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
@@ -108,6 +118,56 @@ fn byte_mutations(bytes: &[u8], n: usize, seed: u64, head: usize) -> Vec<(String
                 m.extend(&bytes[p..p + k]);
                 m.extend(&bytes[q..]);
                 (format!("{k} bytes from {p} copied to {q}"), m)
+            }
+        };
+        out.push((what, m));
+    }
+    out
+}
+
+/// `n` mutations of a ULog's message framing (16-byte file header, then
+/// `u16 size, u8 type, payload`): a message's size or type replaced, or
+/// its payload's first bytes set to 0xFF (lengths and counts inside
+/// definitions).
+fn ulog_framing_mutations(bytes: &[u8], n: usize, seed: u64) -> Vec<(String, Vec<u8>)> {
+    let mut rng = Rng(seed);
+    let mut starts = Vec::new();
+    let mut pos = 16;
+    while pos + 3 <= bytes.len() {
+        starts.push(pos);
+        pos += 3 + usize::from(u16::from_le_bytes([bytes[pos], bytes[pos + 1]]));
+    }
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        // Half of them among the first 64 messages (formats, parameters).
+        let k = if i % 2 == 0 {
+            rng.below(starts.len().min(64))
+        } else {
+            rng.below(starts.len())
+        };
+        let at = starts[k];
+        let mut m = bytes.to_vec();
+        let what = match rng.below(3) {
+            0 => {
+                let old = u16::from_le_bytes([m[at], m[at + 1]]);
+                let size = match rng.below(4) {
+                    0 => 0,
+                    1 => u16::MAX,
+                    2 => old.saturating_sub(1 + rng.below(8) as u16),
+                    _ => rng.next() as u16,
+                };
+                m[at..at + 2].copy_from_slice(&size.to_le_bytes());
+                format!("message {k} at {at}: size {old} -> {size}")
+            }
+            1 => {
+                let t = b"FIAMDLPRCOQSBZ"[rng.below(14)];
+                m[at + 2] = t;
+                format!("message {k} at {at}: type -> '{}'", t as char)
+            }
+            _ => {
+                let len = (1 + rng.below(8)).min(m.len() - at - 3);
+                m[at + 3..at + 3 + len].fill(0xFF);
+                format!("message {k} at {at}: {len} payload bytes -> 0xff")
             }
         };
         out.push((what, m));
@@ -257,7 +317,7 @@ fn run_all(
     read: &dyn Fn(&Path) -> anyhow::Result<()>,
 ) -> (usize, usize) {
     let path = dir.join(name);
-    let (mut ok, mut err) = (0, 0);
+    let (mut ok, mut err, mut caught) = (0, 0, 0);
     let mut failures = Vec::new();
     for (what, bytes) in mutations {
         std::fs::write(&path, bytes).unwrap();
@@ -266,8 +326,11 @@ fn run_all(
             Ok(Err(e)) => {
                 err += 1;
                 let msg = format!("{e:#}");
+                caught += usize::from(msg.contains("the parser failed"));
                 if !msg.contains(name) || msg.contains('\n') {
-                    failures.push(format!("{what}: error does not name {name}: {msg}"));
+                    failures.push(format!(
+                        "{what}: error is not one line naming {name}: {msg}"
+                    ));
                 }
             }
             Err(_) => failures.push(format!("{what}: PANIC")),
@@ -281,7 +344,8 @@ fn run_all(
         failures.join("\n")
     );
     eprintln!(
-        "{name}: {} mutations, {ok} read, {err} refused with an error naming the file, 0 panics",
+        "{name}: {} mutations, {ok} read, {err} refused with an error naming the file \
+         ({caught} of them a parser panic caught by the reader), 0 panics escaped",
         mutations.len()
     );
     (ok, err)
@@ -293,7 +357,7 @@ fn mutated_dataflash_logs_never_panic_and_errors_name_the_file() {
     let bytes = std::fs::read(data("ap_log171_head.bin")).unwrap();
     // The first 150 kB keep the mutations fast (enough for >10 rows).
     let bytes = &bytes[..150_000];
-    let muts = byte_mutations(bytes, 300, 0xB1, 8_000);
+    let muts = byte_mutations(bytes, scaled(300), 0xB1, 8_000);
     let out = dir.join("out.csv");
     run_all(&dir, "mutant.bin", &muts, &|p| {
         read_dataflash_imus(p)?;
@@ -310,12 +374,15 @@ fn mutated_dataflash_logs_never_panic_and_errors_name_the_file() {
 fn mutated_ulogs_never_panic_and_errors_name_the_file() {
     let dir = tmp_dir("ulg");
     let bytes = std::fs::read(data("px4_fmuv3_outdoor_flight.ulg")).unwrap();
-    let muts = byte_mutations(&bytes, 300, 0x01C, 16_000);
     let out = dir.join("out.csv");
-    run_all(&dir, "mutant.ulg", &muts, &|p| {
+    let read = |p: &Path| -> anyhow::Result<()> {
         ulog_to_replay_csv(p, &out)?;
         Ok(())
-    });
+    };
+    let muts = byte_mutations(&bytes, scaled(300), 0x01C, 16_000);
+    run_all(&dir, "mutant.ulg", &muts, &read);
+    let muts = ulog_framing_mutations(&bytes, scaled(200), 0x0F1);
+    run_all(&dir, "mutant.ulg", &muts, &read);
 }
 
 #[test]
@@ -323,7 +390,7 @@ fn mutated_csvs_never_panic_and_errors_name_the_file() {
     let dir = tmp_dir("csv");
     let text = std::fs::read_to_string(data("ap_log171_3imu.csv")).unwrap();
     let head: String = text.lines().take(200).collect::<Vec<_>>().join("\n");
-    let muts = csv_mutations(&head, 400, 0xC5);
+    let muts = csv_mutations(&head, scaled(400), 0xC5);
     run_all(&dir, "mutant.csv", &muts, &|p| {
         read_imu_log(p)?;
         Ok(())
@@ -336,7 +403,7 @@ fn mutated_scenarios_never_panic_and_errors_name_the_file() {
     let text =
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/s3.toml"))
             .unwrap();
-    let muts = toml_mutations(&text, 400, 0x70);
+    let muts = toml_mutations(&text, scaled(400), 0x70);
     let (ok, _) = run_all(&dir, "mutant.toml", &muts, &|p| {
         let scn = read_scenario(p)?;
         // What was accepted is bounded: a run of it cannot exhaust memory.
@@ -414,6 +481,19 @@ fn the_binary_explains_bad_files_in_one_line() {
             vec!["scenario"],
         ),
     ];
+    // A framing mutation on which px4-ulog itself panics (caught by the
+    // reader): the user still sees one line.
+    let mut cases = cases;
+    let probe = dir.join("probe.ulg");
+    let panicking = ulog_framing_mutations(&ulg, 200, 0x0F1)
+        .into_iter()
+        .find(|(_, m)| {
+            std::fs::write(&probe, m).unwrap();
+            ulog_to_replay_csv(&probe, &dir.join("probe.csv"))
+                .is_err_and(|e| format!("{e:#}").contains("the parser failed"))
+        })
+        .expect("a framing mutation on which px4-ulog panics");
+    cases.push(("panics.ulg", panicking.1, vec!["convert"]));
     for (name, bytes, args) in cases {
         let path = dir.join(name);
         std::fs::write(&path, bytes).unwrap();
