@@ -481,9 +481,23 @@ fn the_binary_explains_bad_files_in_one_line() {
             vec!["scenario"],
         ),
     ];
+    // A SPEC §10 replay file in nanoseconds, and a PX4-style extract whose
+    // gyro_y column is empty.
+    let mut replay_ns = String::from(
+        "t,imu0_ax,imu0_ay,imu0_az,imu0_gx,imu0_gy,imu0_gz,dvl_u,dvl_v,dvl_w,att_roll,att_pitch,att_yaw\n",
+    );
+    let mut extract = String::from(
+        "time_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s,accel_x_m_s2,accel_y_m_s2,accel_z_m_s2\n",
+    );
+    for k in 0..60u64 {
+        replay_ns += &format!("{},0,0,-9.8,0,0,0,0,0,0,0,0,0\n", k * 10_000_000);
+        extract += &format!("{},0.1,,0.3,1,2,-9.8\n", 10.0 + 0.01 * k as f64);
+    }
+    let mut cases = cases;
+    cases.push(("ns-replay.csv", replay_ns.into_bytes(), vec!["replay"]));
+    cases.push(("extract.csv", extract.into_bytes(), vec!["convert"]));
     // A framing mutation on which px4-ulog itself panics (caught by the
     // reader): the user still sees one line.
-    let mut cases = cases;
     let probe = dir.join("probe.ulg");
     let panicking = ulog_framing_mutations(&ulg, 200, 0x0F1)
         .into_iter()

@@ -255,15 +255,14 @@ pub fn replay(
                 data.see(6 * k + ch, x);
             }
         }
-        for (i, name) in vel_cols.iter().chain(ATT_COLS.iter()).enumerate() {
-            let idx = vel_idx
-                .iter()
-                .chain(att_idx.iter())
-                .nth(i)
-                .copied()
-                .flatten();
+        // Aiding cells: empty or NaN is "no sample"; text is an error.
+        for (name, idx) in vel_cols
+            .iter()
+            .chain(ATT_COLS.iter())
+            .zip(vel_idx.iter().chain(att_idx.iter()))
+        {
             if let Some(idx) = idx {
-                parse_cell(input, line, name, rec.get(idx))?;
+                parse_cell(input, line, name, rec.get(*idx))?;
             }
         }
         let Some(t) = Some(t).filter(|t| t.is_finite()) else {
