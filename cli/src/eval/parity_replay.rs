@@ -67,6 +67,7 @@ pub fn read_imu_log(path: &Path) -> Result<ImuLog> {
         .collect();
     let mut data = ColumnData::new(names.iter().flatten().cloned().collect());
     let mut times = Vec::new();
+    let mut first_skipped = None;
     for (line, rec) in rdr.records().enumerate() {
         let line = line + 2;
         let rec = rec.with_context(|| format!("{}: line {line}", path.display()))?;
@@ -76,6 +77,7 @@ pub fn read_imu_log(path: &Path) -> Result<ImuLog> {
         }
         if !t.is_finite() || log.t.last().is_some_and(|last| t <= *last) {
             log.skipped += 1;
+            first_skipped.get_or_insert(line);
             continue;
         }
         let mut row = Vec::with_capacity(cols.len());
@@ -92,14 +94,24 @@ pub fn read_imu_log(path: &Path) -> Result<ImuLog> {
         log.t.push(t);
         log.imus.push(row);
     }
+    check_times(path, "t", &times)?;
     if log.t.len() < 10 {
         bail!(
             "{}: fewer than 10 usable rows (a finite, increasing `t`)",
             path.display()
         );
     }
-    check_times(path, "t", &times)?;
     data.check(path)?;
+    if let Some(line) = first_skipped {
+        log.warnings.push(format!(
+            "{}: read {} rows up to t = {} s; skipped {} rows whose `t` is empty, NaN or does not \
+             increase (the first at line {line})",
+            path.display(),
+            log.t.len(),
+            log.t.last().copied().unwrap_or(0.0),
+            log.skipped
+        ));
+    }
     Ok(log)
 }
 

@@ -310,6 +310,7 @@ pub fn replay(
             truth,
         });
     }
+    check_times(input, "t", &times)?;
     if rows.len() < 10 {
         bail!(
             "{}: fewer than 10 usable rows{}",
@@ -318,7 +319,6 @@ pub fn replay(
                 .map_or(String::new(), |f| format!(" after {f} s"))
         );
     }
-    check_times(input, "t", &times)?;
     data.check(input)?;
     if !rows.iter().any(|r| r.avail.iter().any(|a| *a)) {
         bail!(
