@@ -39,3 +39,45 @@ fn bad_scenario_files_get_clear_errors() {
         "{e:#}"
     );
 }
+
+#[test]
+fn unbounded_numbers_are_refused_by_field_before_anything_runs() {
+    let s2 = std::fs::read_to_string(path("s2")).unwrap();
+    let dur = |v: &str| s2.replace("duration_s = 65.0", &format!("duration_s = {v}"));
+    assert_ne!(dur("1"), s2, "s2.toml has duration_s = 65.0");
+    for (text, field) in [
+        (dur("1e12"), "duration_s"),
+        (dur("inf"), "duration_s"),
+        (dur("nan"), "duration_s"),
+        (dur("-5.0"), "duration_s"),
+        (
+            s2.replace("imu_rate_hz = 100.0", "imu_rate_hz = 1e15"),
+            "imu_rate_hz",
+        ),
+        (
+            s2.replace("duration_s = 65.0", "duration_s = 900000.0")
+                .replace("imu_rate_hz = 100.0", "imu_rate_hz = 90000.0"),
+            "duration_s × imu_rate_hz",
+        ),
+        (
+            s2.replacen("start = ", "start = -inf #", 1),
+            "faults[0].start",
+        ),
+        (
+            s2.replacen("sign = ", "sign = 1e300 #", 1),
+            "faults[0].sign",
+        ),
+    ] {
+        let e = format!("{:#}", parse_scenario(&text).unwrap_err());
+        assert!(e.contains(field), "{field}: {e}");
+    }
+    let dir = std::env::temp_dir().join(format!("imu-fdi-scn-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let f = dir.join("huge.toml");
+    std::fs::write(&f, dur("1e12")).unwrap();
+    let e = format!("{:#}", read_scenario(&f).unwrap_err());
+    assert!(
+        e.contains("huge.toml") && e.contains("duration_s = 1000000000000"),
+        "{e}"
+    );
+}

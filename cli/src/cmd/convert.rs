@@ -46,9 +46,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         );
     out!("wrote {}", out.display());
     if let Some(why) = &c.ended_early {
-        out!(
-            "warning: the log parser stopped early ({why}); only the part before it was converted"
-        );
+        eprintln!("warning: {why}");
     }
     Ok(())
 }

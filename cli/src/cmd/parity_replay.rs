@@ -85,6 +85,9 @@ pub(crate) fn run(args: Args) -> Result<()> {
     let inj = injection(&args.inject)?;
     if args.json {
         let log = imu_fdi_cli::eval::parity_replay::read_any_imu_log(&args.input)?;
+        for w in &log.warnings {
+            eprintln!("warning: {w}");
+        }
         let v = imu_fdi_cli::eval::parity_replay::replay_json(
             &log,
             args.train_start,
@@ -118,6 +121,9 @@ pub(crate) fn parity_replay_cmd(
         injection_sizes, injection_sweep, read_any_imu_log, replay_parity_with,
     };
     let log = read_any_imu_log(input)?;
+    for w in &log.warnings {
+        eprintln!("warning: {w}");
+    }
     out!(
         "{}: {} rows, {} IMUs, t = {:.2}..{:.2} s, {} rows skipped (time not increasing, or unreadable tail)",
         input.display(),

@@ -55,6 +55,9 @@ pub(crate) fn run(a: Args) -> Result<()> {
         ArrayKind::Accel => a.size,
     };
     let log = read_any_imu_log(&a.input)?;
+    for w in &log.warnings {
+        eprintln!("warning: {w}");
+    }
     if a.power_up {
         let cases = power_up_table(&log, kind, size, &a.train_starts, a.train_s, a.end)?;
         let ok = cases.iter().filter(|c| c.delay.is_some()).count();

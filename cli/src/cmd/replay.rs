@@ -159,7 +159,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
                 c.att_rows
             );
         if let Some(why) = &c.ended_early {
-            out!("warning: the log parser stopped early ({why}); only the part before it was converted");
+            eprintln!("warning: {why}");
         }
         csv
     } else {

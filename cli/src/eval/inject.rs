@@ -38,19 +38,14 @@ pub struct FaultTable {
 impl FaultTable {
     /// Parses TOML; errors give the line and column.
     pub fn parse(text: &str) -> Result<Self> {
-        let t: Self = toml::from_str(text).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let t: Self =
+            toml::from_str(text).map_err(|e| crate::io::scenario_file::toml_error(text, &e))?;
         if t.faults.is_empty() {
             bail!("no [[faults]] rows");
         }
-        if let Some(r) = t.faults.iter().find(|r| {
-            r.channel > 5 || r.end.partial_cmp(&r.start) != Some(core::cmp::Ordering::Greater)
-        }) {
-            bail!(
-                "fault row on channel {} from {} to {} s: channel must be 0–5 and end > start",
-                r.channel,
-                r.start,
-                r.end
-            );
+        crate::io::scenario_file::validate_faults(&t.faults)?;
+        if let Some(sizes) = &t.sizes {
+            crate::io::scenario_file::validate_sizes(sizes)?;
         }
         if t.sizes.is_none() && t.faults.iter().any(|r| !r.is_hardware()) {
             bail!("shaped faults (E1–E3, F1–F3) need a [sizes] table");

@@ -25,8 +25,12 @@ pub struct ImuLog {
     pub imus: Vec<Vec<[f64; 6]>>,
     /// Number of IMUs found.
     pub count: usize,
-    /// Rows skipped because their time did not increase.
+    /// Rows skipped because their time did not increase (CSV), or 1 if a
+    /// DataFlash log ends partway through a message.
     pub skipped: usize,
+    /// What was skipped or could not be read, one line each, naming the
+    /// file (for stderr).
+    pub warnings: Vec<String>,
 }
 
 /// Reads a SPEC §10 CSV with `imu{k}_…` columns (k = 0, 1, …). Errors name
@@ -57,39 +61,56 @@ pub fn read_imu_log(path: &Path) -> Result<ImuLog> {
         count: cols.len(),
         ..ImuLog::default()
     };
+    use crate::io::csv_checks::{check_imu_value, check_times, parse_cell, ColumnData};
+    let names: Vec<Vec<String>> = (0..cols.len())
+        .map(|k| AXES.iter().map(|a| format!("imu{k}_{a}")).collect())
+        .collect();
+    let mut data = ColumnData::new(names.iter().flatten().cloned().collect());
+    let mut times = Vec::new();
+    let mut first_skipped = None;
     for (line, rec) in rdr.records().enumerate() {
-        let rec = rec.with_context(|| format!("{}: line {}", path.display(), line + 2))?;
-        let parse = |i: usize| -> Result<f64> {
-            let cell = rec.get(i).unwrap_or("");
-            if cell.is_empty() {
-                return Ok(f64::NAN);
-            }
-            cell.parse::<f64>().with_context(|| {
-                format!(
-                    "{}: line {}: '{cell}' is not a number",
-                    path.display(),
-                    line + 2
-                )
-            })
-        };
-        let t = parse(t_col)?;
+        let line = line + 2;
+        let rec = rec.with_context(|| format!("{}: line {line}", path.display()))?;
+        let t = parse_cell(path, line, "t", rec.get(t_col))?;
+        if t.is_finite() {
+            times.push((line, t));
+        }
         if !t.is_finite() || log.t.last().is_some_and(|last| t <= *last) {
             log.skipped += 1;
+            first_skipped.get_or_insert(line);
             continue;
         }
         let mut row = Vec::with_capacity(cols.len());
-        for c in &cols {
+        for (k, c) in cols.iter().enumerate() {
             let mut v = [0.0; 6];
-            for (slot, i) in v.iter_mut().zip(c.iter()) {
-                *slot = parse(*i)?;
+            for (ch, (slot, i)) in v.iter_mut().zip(c.iter()).enumerate() {
+                let name = &names[k][ch];
+                *slot = parse_cell(path, line, name, rec.get(*i))?;
+                check_imu_value(path, line, name, ch, *slot)?;
+                data.see(6 * k + ch, *slot);
             }
             row.push(v);
         }
         log.t.push(t);
         log.imus.push(row);
     }
+    check_times(path, "t", &times)?;
     if log.t.len() < 10 {
-        bail!("{}: fewer than 10 usable rows", path.display());
+        bail!(
+            "{}: fewer than 10 usable rows (a finite, increasing `t`)",
+            path.display()
+        );
+    }
+    data.check(path)?;
+    if let Some(line) = first_skipped {
+        log.warnings.push(format!(
+            "{}: read {} rows up to t = {} s; skipped {} rows whose `t` is empty, NaN or does not \
+             increase (the first at line {line})",
+            path.display(),
+            log.t.len(),
+            log.t.last().copied().unwrap_or(0.0),
+            log.skipped
+        ));
     }
     Ok(log)
 }
@@ -430,61 +451,91 @@ pub fn read_dataflash(path: &Path) -> Result<ImuLog> {
     Ok(log)
 }
 
+/// Largest |acceleration| (m/s²) and |rate| (rad/s) an IMU sample may carry
+/// before it is taken for a corrupt record rather than a measurement.
+const PLAUSIBLE_ACCEL: f64 = 2000.0;
+const PLAUSIBLE_GYRO: f64 = 200.0;
+
 /// Reads every IMU instance of a DataFlash log (one or more), keeping the
-/// rows where all instances share a timestamp.
+/// rows where all instances share a timestamp. How far the file could be
+/// read and what was skipped (garbage bytes, a truncated last message,
+/// samples with non-finite or implausible values) is described in
+/// [`ImuLog::warnings`]; a file with fewer than 10 usable rows is an error
+/// naming the file. A panic inside the parser becomes such an error too.
 pub fn read_dataflash_imus(path: &Path) -> Result<ImuLog> {
     use std::collections::BTreeMap;
-    let file = ardupilot_binlog::File::open(path)
-        .with_context(|| format!("cannot read {}", path.display()))?;
-    let entries = file
-        .entries()
-        .with_context(|| format!("{}: not a DataFlash log", path.display()))?;
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let scan = crate::io::dataflash_scan::scan(&bytes);
+    if scan.messages == 0 {
+        bail!(
+            "{}: not a DataFlash log (no valid message in {} bytes)",
+            path.display(),
+            bytes.len()
+        );
+    }
     let mut by_time: BTreeMap<u64, [Option<[f64; 6]>; MAX_IMUS]> = BTreeMap::new();
-    let mut errors = 0usize;
     let mut instances = 0usize;
-    for e in entries {
-        let e = match e {
-            Ok(e) => e,
-            Err(_) => {
-                // A corrupt or truncated tail: keep what was read.
-                errors += 1;
-                break;
+    let mut implausible = 0usize;
+    let parsed = crate::io::guard::catch_quietly(|| {
+        let reader = ardupilot_binlog::Reader::new(std::io::Cursor::new(&bytes[..]));
+        for e in reader {
+            // The reader resynchronises on garbage itself; an error here is
+            // an unreadable tail.
+            let Ok(e) = e else { break };
+            let inst = match e.name.as_str() {
+                "IMU" => e.get_u64("I").map_or(0, |i| i as usize),
+                "IMU2" => 1,
+                "IMU3" => 2,
+                _ => continue,
+            };
+            if inst >= MAX_IMUS {
+                continue;
             }
-        };
-        let inst = match e.name.as_str() {
-            "IMU" => e.get_u64("I").map_or(0, |i| i as usize),
-            "IMU2" => 1,
-            "IMU3" => 2,
-            _ => continue,
-        };
-        if inst >= MAX_IMUS {
-            continue;
+            let t_us = e
+                .get_u64("TimeUS")
+                .or_else(|| e.get_u64("TimeMS").map(|ms| ms.saturating_mul(1000)))
+                .or(e.timestamp_usec);
+            let Some(t_us) = t_us else { continue };
+            let v = |k: &str| e.get_f64(k).unwrap_or(f64::NAN);
+            let sample = [
+                v("AccX"),
+                v("AccY"),
+                v("AccZ"),
+                v("GyrX"),
+                v("GyrY"),
+                v("GyrZ"),
+            ];
+            instances = instances.max(inst + 1);
+            let ok = sample.iter().enumerate().all(|(i, x)| {
+                x.is_finite()
+                    && x.abs()
+                        <= if i < 3 {
+                            PLAUSIBLE_ACCEL
+                        } else {
+                            PLAUSIBLE_GYRO
+                        }
+            });
+            if !ok {
+                implausible += 1;
+                continue;
+            }
+            if let Some(slot) = by_time.entry(t_us).or_default().get_mut(inst) {
+                *slot = Some(sample);
+            }
         }
-        let t_us = e
-            .get_u64("TimeUS")
-            .or_else(|| e.get_u64("TimeMS").map(|ms| ms * 1000))
-            .or(e.timestamp_usec);
-        let Some(t_us) = t_us else { continue };
-        let v = |k: &str| e.get_f64(k).unwrap_or(f64::NAN);
-        let sample = [
-            v("AccX"),
-            v("AccY"),
-            v("AccZ"),
-            v("GyrX"),
-            v("GyrY"),
-            v("GyrZ"),
-        ];
-        instances = instances.max(inst + 1);
-        if let Some(slot) = by_time.entry(t_us).or_default().get_mut(inst) {
-            *slot = Some(sample);
-        }
+    });
+    if let Err(why) = parsed {
+        bail!(
+            "{}: corrupt DataFlash log: the parser failed ({why})",
+            path.display()
+        );
     }
     if instances == 0 {
         bail!("{}: no IMU messages in the log", path.display());
     }
     let mut log = ImuLog {
         count: instances,
-        skipped: errors,
+        skipped: usize::from(scan.truncated_at.is_some()),
         ..ImuLog::default()
     };
     for (t_us, row) in by_time {
@@ -500,7 +551,28 @@ pub fn read_dataflash_imus(path: &Path) -> Result<ImuLog> {
         log.imus.push(all);
     }
     if log.t.len() < 10 {
-        bail!("{}: fewer than 10 synchronous IMU rows", path.display());
+        bail!(
+            "{}: fewer than 10 synchronous IMU rows ({} found{})",
+            path.display(),
+            log.t.len(),
+            scan.describe_problems()
+                .map_or(String::new(), |p| format!("; {p}"))
+        );
+    }
+    let mut problems: Vec<String> = scan.describe_problems().into_iter().collect();
+    if implausible > 0 {
+        problems.push(format!(
+            "dropped {implausible} IMU samples with non-finite or implausible values"
+        ));
+    }
+    if !problems.is_empty() {
+        log.warnings.push(format!(
+            "{}: read {} IMU rows up to t = {:.1} s; {}",
+            path.display(),
+            log.t.len(),
+            log.t.last().copied().unwrap_or(0.0),
+            problems.join("; ")
+        ));
     }
     Ok(log)
 }

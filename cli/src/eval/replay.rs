@@ -236,16 +236,40 @@ pub fn replay(
         ..Default::default()
     };
     // --- read ---------------------------------------------------------------
+    use crate::io::csv_checks::{check_imu_value, check_times, parse_cell, ColumnData};
+    let imu_names: Vec<[String; 6]> = (0..imu_idx.len()).map(imu_cols).collect();
+    let mut data = ColumnData::new(imu_names.iter().flatten().cloned().collect());
+    let mut times = Vec::new();
     let mut rows: Vec<Row> = Vec::new();
     let mut last_t: Option<f64> = None;
     for (line, rec) in rdr.records().enumerate() {
-        let rec =
-            rec.with_context(|| format!("{}: bad CSV at line {}", input.display(), line + 2))?;
+        let line = line + 2;
+        let rec = rec.with_context(|| format!("{}: bad CSV at line {line}", input.display()))?;
         sum.rows += 1;
-        let Some(t) = parse_opt(&rec, Some(t_idx)).filter(|t| t.is_finite()) else {
+        let t = parse_cell(input, line, "t", rec.get(t_idx))?;
+        for (k, idx) in imu_idx.iter().enumerate() {
+            for (ch, i) in idx.iter().enumerate() {
+                let name = &imu_names[k][ch];
+                let x = parse_cell(input, line, name, rec.get(*i))?;
+                check_imu_value(input, line, name, ch, x)?;
+                data.see(6 * k + ch, x);
+            }
+        }
+        // Aiding cells: empty or NaN is "no sample"; text is an error.
+        for (name, idx) in vel_cols
+            .iter()
+            .chain(ATT_COLS.iter())
+            .zip(vel_idx.iter().chain(att_idx.iter()))
+        {
+            if let Some(idx) = idx {
+                parse_cell(input, line, name, rec.get(*idx))?;
+            }
+        }
+        let Some(t) = Some(t).filter(|t| t.is_finite()) else {
             sum.skipped_rows += 1;
             continue;
         };
+        times.push((line, t));
         if last_t.is_some_and(|lt| t <= lt) {
             sum.skipped_rows += 1;
             continue;
@@ -286,6 +310,7 @@ pub fn replay(
             truth,
         });
     }
+    check_times(input, "t", &times)?;
     if rows.len() < 10 {
         bail!(
             "{}: fewer than 10 usable rows{}",
@@ -294,6 +319,7 @@ pub fn replay(
                 .map_or(String::new(), |f| format!(" after {f} s"))
         );
     }
+    data.check(input)?;
     if !rows.iter().any(|r| r.avail.iter().any(|a| *a)) {
         bail!(
             "{}: no aiding in the file (every dvl_*, gnss_* and att_* cell empty or absent): \

@@ -117,6 +117,14 @@ fn cell(r: &csv::StringRecord, i: Option<usize>) -> Option<f64> {
         .filter(|v| v.is_finite())
 }
 
+/// `(line, t)` of the rows whose time cell is a finite number.
+fn finite_times(rows: &[csv::StringRecord], ti: usize) -> Vec<(usize, f64)> {
+    rows.iter()
+        .enumerate()
+        .filter_map(|(i, r)| cell(r, Some(ti)).map(|t| (i + 2, t)))
+        .collect()
+}
+
 fn time_column(headers: &csv::StringRecord, path: &Path) -> Result<usize> {
     ["time_s", "Time (s)", "t"]
         .iter()
@@ -145,30 +153,42 @@ pub fn csv_extracts_to_replay_csv(
             imu.display()
         )
     })?;
+    use super::csv_checks::{check_imu_value, check_times, parse_cell, ColumnData};
+    let header_name = |i: usize| h.get(i).unwrap_or("?").to_string();
+    let time_name = header_name(ti);
+    let names: Vec<[String; 6]> = layout.columns.iter().map(|c| c.map(header_name)).collect();
+    let mut data = ColumnData::new(names.iter().flatten().cloned().collect());
+    let mut times = Vec::with_capacity(rows.len());
     let mut t = Vec::with_capacity(rows.len());
     let mut imus = Vec::with_capacity(rows.len());
-    for r in &rows {
-        let Some(time) = cell(r, Some(ti)) else {
+    for (line, r) in rows.iter().enumerate() {
+        let line = line + 2;
+        let time = parse_cell(imu, line, &time_name, r.get(ti))?;
+        let mut sample = Vec::with_capacity(layout.columns.len());
+        for (k, c) in layout.columns.iter().enumerate() {
+            let mut v = [f64::NAN; 6];
+            for (i, slot) in v.iter_mut().enumerate() {
+                let scale = if i < 3 {
+                    layout.accel_scale
+                } else {
+                    layout.gyro_scale
+                };
+                let x = parse_cell(imu, line, &names[k][i], r.get(c[i]))?;
+                *slot = x * scale * layout.signs[i];
+                check_imu_value(imu, line, &names[k][i], i, *slot)?;
+                data.see(6 * k + i, *slot);
+            }
+            sample.push(v);
+        }
+        if !time.is_finite() {
             continue;
-        };
+        }
+        times.push((line, time));
         t.push(time);
-        imus.push(
-            layout
-                .columns
-                .iter()
-                .map(|c| {
-                    core::array::from_fn(|i| {
-                        let scale = if i < 3 {
-                            layout.accel_scale
-                        } else {
-                            layout.gyro_scale
-                        };
-                        cell(r, c.get(i).copied()).map_or(f64::NAN, |v| v * scale * layout.signs[i])
-                    })
-                })
-                .collect(),
-        );
+        imus.push(sample);
     }
+    check_times(imu, &time_name, &times)?;
+    data.check(imu)?;
     let n = t.len();
     let slot = |x: f64| t.partition_point(|v| *v < x);
     let mut gnss_rows: Vec<Option<[f64; 3]>> = vec![None; n];
@@ -180,6 +200,7 @@ pub fn csv_extracts_to_replay_csv(
         if v.iter().any(Option::is_none) {
             bail!("{}: missing vel_n_m_s, vel_e_m_s or vel_d_m_s", p.display());
         }
+        check_times(p, "time", &finite_times(&rows, ti))?;
         let fix = f("fix_status").or_else(|| f("fix_type"));
         let valid = f("vel_ned_valid");
         for r in &rows {
@@ -205,6 +226,7 @@ pub fn csv_extracts_to_replay_csv(
         let f = |name: &str| h.iter().position(|x| x.trim() == name);
         let q = ["q_w", "q_x", "q_y", "q_z"].map(&f);
         let e = ["roll_deg", "pitch_deg", "yaw_deg"].map(&f);
+        check_times(p, "time", &finite_times(&rows, ti))?;
         let deg = std::f64::consts::PI / 180.0;
         for r in &rows {
             let Some(time) = cell(r, Some(ti)) else {

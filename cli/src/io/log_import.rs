@@ -26,6 +26,14 @@ use px4_ulog::full_parser::{read_file, SomeVec};
 // to it, and its old path here keeps working.
 pub use super::csv_extract::csv_extracts_to_replay_csv;
 
+/// True when an IMU sample `[a_x, a_y, a_z, p, q, r]` is finite and below
+/// 2000 m/s² and 200 rad/s: anything beyond is a corrupt record.
+pub fn plausible_imu(v: &[f64; 6]) -> bool {
+    v.iter()
+        .enumerate()
+        .all(|(i, x)| x.is_finite() && x.abs() <= if i < 3 { 2000.0 } else { 200.0 })
+}
+
 /// What a conversion produced.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ImportSummary {
@@ -41,8 +49,9 @@ pub struct ImportSummary {
     pub gnss_rows: usize,
     /// Rows carrying an attitude.
     pub att_rows: usize,
-    /// Why the parser stopped early, if it did (only the valid prefix of
-    /// the log was converted).
+    /// How far the log was read and what was skipped, if anything (one
+    /// line naming the file, for a warning on stderr); `None` for a clean
+    /// log.
     pub ended_early: Option<String>,
 }
 
@@ -73,13 +82,40 @@ pub fn quaternion_to_euler(q: [f64; 4]) -> [f64; 3] {
     [roll, pitch, yaw]
 }
 
+/// The text of a px4-ulog error: the crate wraps its parse errors in an
+/// `io::Error` formatted with `{:?}`; keep only their description.
+fn ulog_error_text(e: &std::io::Error) -> String {
+    let s = e.to_string();
+    match s.split_once("description: \"") {
+        Some((_, rest)) => rest
+            .rsplit_once('"')
+            .map_or(rest, |(d, _)| d)
+            .replace("\\\"", "\""),
+        None if s.contains('{') || s.contains("Some(") => format!("{:?}", e.kind()).to_lowercase(),
+        None => s,
+    }
+}
+
 /// Converts a `.ulg` to a SPEC §10 CSV at `out`.
 pub fn ulog_to_replay_csv(input: &Path, out: &Path) -> Result<ImportSummary> {
     let name = input
         .to_str()
         .with_context(|| format!("{}: path is not UTF-8", input.display()))?;
-    let parsed = read_file(name)
-        .with_context(|| format!("{}: not a readable ULog file", input.display()))?;
+    // px4-ulog indexes slices with lengths read from the file and panics on
+    // some corrupt files: the panic becomes an error naming the file.
+    let parsed = match crate::io::guard::catch_quietly(|| read_file(name)) {
+        Ok(r) => r.map_err(|e| {
+            anyhow::anyhow!(
+                "{}: not a readable ULog file: {}",
+                input.display(),
+                ulog_error_text(&e)
+            )
+        })?,
+        Err(why) => bail!(
+            "{}: corrupt ULog: the parser failed ({why})",
+            input.display()
+        ),
+    };
     let first = |topic: &str| parsed.messages.get(topic).and_then(|m| m.values().next());
     let imu = first("sensor_combined")
         .with_context(|| format!("{}: no sensor_combined topic", input.display()))?;
@@ -110,10 +146,15 @@ pub fn ulog_to_replay_csv(input: &Path, out: &Path) -> Result<ImportSummary> {
         );
         let valid = column(f, "vel_ned_valid").unwrap_or_else(|| vec![1.0; t.len()]);
         let fix = column(f, "fix_type").unwrap_or_else(|| vec![3.0; t.len()]);
-        for i in 0..t.len() {
-            if valid[i] > 0.5 && fix[i] >= 3.0 {
-                if let Some(s) = gnss.get_mut(slot(t[i])) {
-                    *s = Some([vn[i], ve[i], vd[i]]);
+        for (i, ti) in t.iter().enumerate() {
+            let (Some(ok), Some(fx), Some(n), Some(e), Some(d)) =
+                (valid.get(i), fix.get(i), vn.get(i), ve.get(i), vd.get(i))
+            else {
+                break;
+            };
+            if *ok > 0.5 && *fx >= 3.0 {
+                if let Some(s) = gnss.get_mut(slot(*ti)) {
+                    *s = Some([*n, *e, *d]);
                 }
             }
         }
@@ -123,30 +164,81 @@ pub fn ulog_to_replay_csv(input: &Path, out: &Path) -> Result<ImportSummary> {
         let q: Vec<Vec<f64>> = (0..4)
             .map(|i| col(f, &format!("q[{i}]")))
             .collect::<Result<_>>()?;
-        for i in 0..t.len() {
-            if let Some(s) = att.get_mut(slot(t[i])) {
-                *s = Some(quaternion_to_euler([q[0][i], q[1][i], q[2][i], q[3][i]]));
+        for (i, ti) in t.iter().enumerate() {
+            let (Some(w), Some(x), Some(y), Some(z)) =
+                (q[0].get(i), q[1].get(i), q[2].get(i), q[3].get(i))
+            else {
+                break;
+            };
+            if let Some(s) = att.get_mut(slot(*ti)) {
+                *s = Some(quaternion_to_euler([*w, *x, *y, *z]));
+            }
+        }
+    }
+    let sample = |i: usize| -> Option<[f64; 6]> {
+        let v = [
+            *a[0].get(i)?,
+            *a[1].get(i)?,
+            *a[2].get(i)?,
+            *g[0].get(i)?,
+            *g[1].get(i)?,
+            *g[2].get(i)?,
+        ];
+        plausible_imu(&v).then_some(v)
+    };
+    let mut t_rows = Vec::with_capacity(n);
+    let mut imus = Vec::with_capacity(n);
+    let mut implausible = 0usize;
+    for (i, t) in t_imu.iter().enumerate() {
+        match sample(i) {
+            Some(v) => {
+                t_rows.push(t * 1e-6);
+                imus.push(vec![v]);
+            }
+            None => {
+                // Keep the row (its aiding slot) without an IMU sample.
+                implausible += 1;
+                t_rows.push(f64::NAN);
+                imus.push(Vec::new());
             }
         }
     }
     let rows = ReplayRows {
-        t: t_imu.iter().map(|t| t * 1e-6).collect(),
-        imus: (0..n)
-            .map(|i| vec![[a[0][i], a[1][i], a[2][i], g[0][i], g[1][i], g[2][i]]])
-            .collect(),
+        t: t_rows,
+        imus,
         gnss,
         att,
     };
-    let mut summary = write_replay_csv(out, &rows)?;
-    summary.ended_early = match &parsed.completeness {
-        px4_ulog::stream_parser::model::Completeness::Complete => None,
+    let mut summary = write_replay_csv(out, &rows).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: no usable IMU rows ({implausible} of {n} samples non-finite or implausible): {e}",
+            input.display()
+        )
+    })?;
+    let mut problems = Vec::new();
+    match &parsed.completeness {
+        px4_ulog::stream_parser::model::Completeness::Complete => {}
         px4_ulog::stream_parser::model::Completeness::Truncated => {
-            Some("the file ends partway through a record".into())
+            problems.push("stopped where the file ends partway through a record".to_string());
         }
         px4_ulog::stream_parser::model::Completeness::MalformedRecord(why) => {
-            Some(format!("malformed record: {why}"))
+            problems.push(format!("stopped at a malformed record: {why}"));
         }
-    };
+    }
+    if implausible > 0 {
+        problems.push(format!(
+            "dropped {implausible} IMU samples with non-finite or implausible values"
+        ));
+    }
+    if !problems.is_empty() {
+        summary.ended_early = Some(format!(
+            "{}: read {} IMU rows up to t = {:.1} s; {}",
+            input.display(),
+            summary.rows,
+            summary.span.1,
+            problems.join("; ")
+        ));
+    }
     Ok(summary)
 }
 
@@ -192,12 +284,15 @@ pub fn write_replay_csv(out: &Path, rows: &ReplayRows) -> Result<ImportSummary> 
     }
     w.write_record(&header)?;
     let cell = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x}"));
-    let mut last_t = f64::NEG_INFINITY;
-    let mut written = 0;
+    let (mut first_t, mut last_t) = (f64::NAN, f64::NEG_INFINITY);
+    let mut written = 0usize;
     let (mut gnss_rows, mut att_rows) = (0, 0);
     for (i, &t) in rows.t.iter().enumerate() {
         if t <= last_t || !t.is_finite() {
             continue;
+        }
+        if written == 0 {
+            first_t = t;
         }
         last_t = t;
         let mut rec = vec![format!("{t}")];
@@ -216,14 +311,17 @@ pub fn write_replay_csv(out: &Path, rows: &ReplayRows) -> Result<ImportSummary> 
         written += 1;
     }
     w.flush()?;
-    let span = (
-        rows.t.first().copied().unwrap_or(0.0),
-        rows.t.last().copied().unwrap_or(0.0),
-    );
+    if written < 10 {
+        bail!(
+            "fewer than 10 IMU rows with a finite, increasing time to write to {}",
+            out.display()
+        );
+    }
+    let span = (first_t, last_t);
     Ok(ImportSummary {
         rows: written,
         span,
-        imu_rate_hz: (n - 1) as f64 / (span.1 - span.0).max(1e-9),
+        imu_rate_hz: (written - 1) as f64 / (span.1 - span.0).max(1e-9),
         imu_instances: instances,
         gnss_rows,
         att_rows,
@@ -245,56 +343,65 @@ pub fn dataflash_to_replay_csv(input: &Path, out: &Path) -> Result<ImportSummary
     let mut gnss: Vec<Option<[f64; 3]>> = vec![None; n];
     let mut att: Vec<Option<[f64; 3]>> = vec![None; n];
     let slot = |t: f64| log.t.partition_point(|x| *x < t);
-    let file = ardupilot_binlog::File::open(input)
-        .with_context(|| format!("cannot read {}", input.display()))?;
-    let entries = file
-        .entries()
-        .with_context(|| format!("{}: not a DataFlash log", input.display()))?;
+    let bytes = std::fs::read(input).with_context(|| format!("cannot read {}", input.display()))?;
     let deg = std::f64::consts::PI / 180.0;
-    for e in entries {
-        // A corrupt or truncated tail: keep what was read.
-        let Ok(e) = e else { break };
-        let is_gps = e.name == "GPS";
-        if !is_gps && e.name != "ATT" {
-            continue;
-        }
-        // Old GPS messages carry GPS time of week in TimeMS and boot time in T.
-        let boot_ms = if is_gps { "T" } else { "TimeMS" };
-        // (Integer fields decode as signed or unsigned by format: read as f64.)
-        let t_us = e
-            .get_f64("TimeUS")
-            .or_else(|| e.get_f64(boot_ms).map(|ms| ms * 1000.0))
-            .or(e.timestamp_usec.map(|t| t as f64));
-        let Some(t_us) = t_us else { continue };
-        let v = |k: &str| e.get_f64(k).unwrap_or(f64::NAN);
-        let idx = slot(t_us * 1e-6);
-        if is_gps {
-            if v("Status") < 3.0 {
+    let parsed = super::guard::catch_quietly(|| {
+        for e in ardupilot_binlog::Reader::new(std::io::Cursor::new(&bytes[..])) {
+            // A corrupt or truncated tail: keep what was read.
+            let Ok(e) = e else { break };
+            let is_gps = e.name == "GPS";
+            if !is_gps && e.name != "ATT" {
                 continue;
             }
-            let (spd, crs) = (v("Spd"), v("GCrs") * deg);
-            let vel = [spd * crs.cos(), spd * crs.sin(), v("VZ")];
-            if let (true, Some(s)) = (vel.iter().all(|x| x.is_finite()), gnss.get_mut(idx)) {
-                *s = Some(vel);
-            }
-        } else {
-            let a = [
-                v("Roll") * deg,
-                v("Pitch") * deg,
-                wrap_pi_f64(v("Yaw") * deg),
-            ];
-            if let (true, Some(s)) = (a.iter().all(|x| x.is_finite()), att.get_mut(idx)) {
-                *s = Some(a);
+            // Old GPS messages carry GPS time of week in TimeMS and boot time in T.
+            let boot_ms = if is_gps { "T" } else { "TimeMS" };
+            // (Integer fields decode as signed or unsigned by format: read as f64.)
+            let t_us = e
+                .get_f64("TimeUS")
+                .or_else(|| e.get_f64(boot_ms).map(|ms| ms * 1000.0))
+                .or(e.timestamp_usec.map(|t| t as f64));
+            let Some(t_us) = t_us.filter(|t| t.is_finite()) else {
+                continue;
+            };
+            let v = |k: &str| e.get_f64(k).unwrap_or(f64::NAN);
+            let idx = slot(t_us * 1e-6);
+            if is_gps {
+                if v("Status") < 3.0 {
+                    continue;
+                }
+                let (spd, crs) = (v("Spd"), v("GCrs") * deg);
+                let vel = [spd * crs.cos(), spd * crs.sin(), v("VZ")];
+                if let (true, Some(s)) = (vel.iter().all(|x| x.is_finite()), gnss.get_mut(idx)) {
+                    *s = Some(vel);
+                }
+            } else {
+                let a = [
+                    v("Roll") * deg,
+                    v("Pitch") * deg,
+                    wrap_pi_f64(v("Yaw") * deg),
+                ];
+                if let (true, Some(s)) = (a.iter().all(|x| x.is_finite()), att.get_mut(idx)) {
+                    *s = Some(a);
+                }
             }
         }
+    });
+    if let Err(why) = parsed {
+        bail!(
+            "{}: corrupt DataFlash log: the parser failed ({why})",
+            input.display()
+        );
     }
+    let warnings = log.warnings.join("; ");
     let rows = ReplayRows {
         t: log.t,
         imus: log.imus,
         gnss,
         att,
     };
-    write_replay_csv(out, &rows)
+    let mut summary = write_replay_csv(out, &rows)?;
+    summary.ended_early = (!warnings.is_empty()).then_some(warnings);
+    Ok(summary)
 }
 
 /// Converts a `.ulg` or `.bin` log, or a CSV extract (with its GNSS and

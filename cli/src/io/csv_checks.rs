@@ -1,0 +1,189 @@
+//! Plausibility checks shared by the CSV readers (SPEC §10 replay CSVs and
+//! CSV extracts): a time column in seconds that increases, IMU columns
+//! that carry numbers of a plausible size. Errors name the file, the line
+//! (where one applies) and the column.
+
+use std::path::Path;
+
+use anyhow::{bail, Result};
+
+/// Smallest plausible median time step, s (a 100 kHz IMU).
+pub const MIN_MEDIAN_STEP_S: f64 = 1e-5;
+/// Largest plausible median time step, s.
+pub const MAX_MEDIAN_STEP_S: f64 = 10.0;
+/// Share of rows whose time may repeat or go backwards before the file is
+/// refused rather than those rows skipped.
+pub const MAX_NON_INCREASING_SHARE: f64 = 0.1;
+/// Largest plausible |acceleration|, m/s² (≈ 200 g).
+pub const MAX_ACCEL: f64 = 2000.0;
+/// Largest plausible |angular rate|, rad/s (≈ 11 500 °/s).
+pub const MAX_GYRO: f64 = 200.0;
+
+/// Checks the times of a CSV's rows, given as `(line, t)` for every row
+/// whose time cell held a finite number: at most
+/// [`MAX_NON_INCREASING_SHARE`] of them may fail to increase (the readers
+/// skip those), and the median step must lie within
+/// [`MIN_MEDIAN_STEP_S`]…[`MAX_MEDIAN_STEP_S`] (a step of 10⁴ looks like
+/// microseconds, 10⁷ like nanoseconds).
+pub fn check_times(path: &Path, column: &str, times: &[(usize, f64)]) -> Result<()> {
+    if times.len() < 2 {
+        return Ok(());
+    }
+    let mut bad = 0usize;
+    let mut first_bad = None;
+    let mut steps = Vec::with_capacity(times.len());
+    let mut last = times[0].1;
+    for &(line, t) in &times[1..] {
+        if t <= last {
+            bad += 1;
+            first_bad.get_or_insert((line, t, last));
+        } else {
+            steps.push(t - last);
+            last = t;
+        }
+    }
+    if let Some((line, t, prev)) = first_bad {
+        if bad as f64 > MAX_NON_INCREASING_SHARE * (times.len() - 1) as f64 {
+            bail!(
+                "{}: line {line}, column '{column}': time {t} does not increase (previous {prev}); \
+                 {bad} of {} rows repeat or go back in time: sort the file by time",
+                path.display(),
+                times.len()
+            );
+        }
+    }
+    if steps.is_empty() {
+        return Ok(());
+    }
+    steps.sort_by(f64::total_cmp);
+    let median = steps[steps.len() / 2];
+    if median > MAX_MEDIAN_STEP_S {
+        let unit = if median >= 1e5 {
+            "nanoseconds"
+        } else if median >= 100.0 {
+            "microseconds"
+        } else {
+            "milliseconds"
+        };
+        bail!(
+            "{}: column '{column}': median time step {median} s ({:.3e} Hz): timestamps look like \
+             {unit}; expected seconds",
+            path.display(),
+            1.0 / median
+        );
+    }
+    if median < MIN_MEDIAN_STEP_S {
+        bail!(
+            "{}: column '{column}': median time step {median:e} s (above {:.0} kHz) is \
+             implausible; expected seconds",
+            path.display(),
+            1e-3 / MIN_MEDIAN_STEP_S
+        );
+    }
+    Ok(())
+}
+
+/// Checks one IMU value read at `line`, `column` (channel 0–2 accel m/s²,
+/// 3–5 gyro rad/s): finite values above [`MAX_ACCEL`] / [`MAX_GYRO`] are
+/// errors (a unit mix-up or a corrupt cell); NaN is a gap and passes.
+pub fn check_imu_value(
+    path: &Path,
+    line: usize,
+    column: &str,
+    channel: usize,
+    x: f64,
+) -> Result<()> {
+    let (max, what) = if channel < 3 {
+        (MAX_ACCEL, "m/s²")
+    } else {
+        (MAX_GYRO, "rad/s")
+    };
+    if x.is_nan() || x.abs() <= max {
+        return Ok(());
+    }
+    bail!(
+        "{}: line {line}, column '{column}': {x} is not a plausible value (|x| ≤ {max} {what})",
+        path.display()
+    )
+}
+
+/// Counts finite values per column; a column that has none (all empty or
+/// NaN) is an error naming it.
+#[derive(Debug, Clone)]
+pub struct ColumnData {
+    names: Vec<String>,
+    finite: Vec<usize>,
+}
+
+impl ColumnData {
+    /// Columns to watch, by name.
+    pub fn new(names: Vec<String>) -> Self {
+        let finite = vec![0; names.len()];
+        Self { names, finite }
+    }
+
+    /// Records one value of column `k`.
+    pub fn see(&mut self, k: usize, x: f64) {
+        if let (true, Some(c)) = (x.is_finite(), self.finite.get_mut(k)) {
+            *c += 1;
+        }
+    }
+
+    /// Error naming the file and the first column without a finite value.
+    pub fn check(&self, path: &Path) -> Result<()> {
+        if let Some((name, _)) = self.names.iter().zip(&self.finite).find(|(_, n)| **n == 0) {
+            bail!(
+                "{}: column '{name}' has no numeric value (every cell empty or NaN)",
+                path.display()
+            );
+        }
+        Ok(())
+    }
+}
+
+/// Parses a cell: empty or NaN is `Ok(NaN)` (a gap), text that is not a
+/// number an error naming the file, line and column.
+pub fn parse_cell(path: &Path, line: usize, column: &str, cell: Option<&str>) -> Result<f64> {
+    let s = cell.unwrap_or("").trim();
+    if s.is_empty() {
+        return Ok(f64::NAN);
+    }
+    s.parse::<f64>().map_err(|_| {
+        anyhow::anyhow!(
+            "{}: line {line}, column '{column}': '{s}' is not a number",
+            path.display()
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn times(step: f64) -> Vec<(usize, f64)> {
+        (0..100).map(|k| (k + 2, k as f64 * step)).collect()
+    }
+
+    #[test]
+    fn time_units_and_order_are_checked() {
+        let p = Path::new("x.csv");
+        check_times(p, "t", &times(0.01)).expect("seconds");
+        let e = check_times(p, "t", &times(1e7)).unwrap_err().to_string();
+        assert!(e.contains("x.csv") && e.contains("nanoseconds"), "{e}");
+        let e = check_times(p, "t", &times(1e4)).unwrap_err().to_string();
+        assert!(e.contains("microseconds"), "{e}");
+        let e = check_times(p, "t", &times(1e-9)).unwrap_err().to_string();
+        assert!(e.contains("implausible"), "{e}");
+        let mut back = times(0.01);
+        back.reverse();
+        let e = check_times(p, "t", &back).unwrap_err().to_string();
+        assert!(e.contains("line 100, column 't'"), "{e}");
+        let mut c = ColumnData::new(vec!["a".into(), "b".into()]);
+        c.see(0, 1.0);
+        c.see(1, f64::NAN);
+        let e = c.check(p).unwrap_err().to_string();
+        assert!(e.contains("column 'b'"), "{e}");
+        assert!(check_imu_value(p, 3, "imu0_ax", 0, 1e308).is_err());
+        assert!(check_imu_value(p, 3, "imu0_ax", 0, f64::NAN).is_ok());
+    }
+}
