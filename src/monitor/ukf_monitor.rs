@@ -55,6 +55,8 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     z_threshold: T,
     windows: [InnovationWindow<T, W>; NZ],
     since_seen: [T; NZ],
+    /// Time since each aiding channel was last fused, s.
+    since_fused: [T; NZ],
     sensitivity: Mat6<T>,
     signature: Mat6<T>,
     latest_innovation: ImuVec<T>,
@@ -109,6 +111,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             z_threshold,
             windows: core::array::from_fn(|_| InnovationWindow::new()),
             since_seen: [T::lit(1e9); NZ],
+            since_fused: [T::lit(1e9); NZ],
             sensitivity: Mat6::zeros(),
             signature: Mat6::zeros(),
             latest_innovation: ImuVec::zeros(),
@@ -198,7 +201,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         health.saturated = saturated;
         let elapsed = dt_use.unwrap_or(T::zero());
         self.stats_holdoff = (self.stats_holdoff - elapsed).max(T::zero());
-        for s in self.since_seen.iter_mut() {
+        for s in self
+            .since_seen
+            .iter_mut()
+            .chain(self.since_fused.iter_mut())
+        {
             *s += elapsed;
         }
 
@@ -292,7 +299,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// covariance (cross terms zeroed, so the covariance stays positive
     /// definite) and withdrawn from the update instead of being fused. The
     /// statistics restart: windows cleared, decisions reset, a hold-off of
-    /// `converge_s` while the filter settles. Returns the aiding left to
+    /// `converge_s` while the filter settles. Only for a channel fused within
+    /// `aiding_timeout_s`: aiding that first arrives or returns after a
+    /// loss is fused as before. Returns the aiding left to
     /// fuse and whether anything was re-aligned. A triad that is not complete
     /// in this epoch cannot be re-aligned: its outlying channel is withheld
     /// until it is.
@@ -306,20 +315,27 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let predicted = self.meas.predict(self.ukf.state(), omega);
         let mut due = [false; NZ];
         for (i, d) in due.iter_mut().enumerate() {
-            let (Some(a), Some(z), Some(zp), Some(bound), Some(run)) = (
+            let (Some(a), Some(z), Some(zp), Some(bound), Some(run), Some(fused)) = (
                 aiding.available.get(i),
                 aiding.z.get(i),
                 predicted.get(i),
                 self.cfg.realign_innovation.get(i),
                 self.rejection_run.get(i),
+                self.since_fused.get(i),
             ) else {
                 continue;
             };
+            // Only a jump of a channel in use: aiding that returns (or first
+            // arrives) after more than `aiding_timeout_s` is fused as before.
+            let recent = *fused <= self.cfg.aiding_timeout_s;
             let mut innovation = *z - *zp;
             if i >= ROLL {
                 innovation = wrap_pi(innovation);
             }
-            *d = *a && *run >= limit && (!innovation.finite() || innovation.abs() > *bound);
+            *d = *a
+                && recent
+                && *run >= limit
+                && (!innovation.finite() || innovation.abs() > *bound);
         }
         if !due.iter().any(|d| *d) {
             return (out, false);
@@ -498,6 +514,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             rejected |= !d.fused;
             if let Some(n) = self.rejection_run.get_mut(i) {
                 *n = if d.fused { 0 } else { n.saturating_add(1) };
+            }
+            if d.fused {
+                if let Some(s) = self.since_fused.get_mut(i) {
+                    *s = T::zero();
+                }
             }
             if let Some(s) = self.since_seen.get_mut(i) {
                 *s = T::zero();
