@@ -56,6 +56,7 @@ impl Imu for StillVehicle {
             gyro: [self.noise(sg), self.noise(sg), r_bias + self.noise(sg)],
             temperature: 25.0,
             sequence: self.sequence,
+            timestamp_us: None,
         })
     }
 }

@@ -256,6 +256,7 @@ impl<SPI: SpiDevice> Icm42688<SPI> {
             // Datasheet: T(°C) = TEMP_DATA / 132.48 + 25.
             temperature: f32::from(t) / 132.48 + 25.0,
             sequence,
+            timestamp_us: None,
         })
     }
 }

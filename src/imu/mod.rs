@@ -18,6 +18,11 @@ pub struct ImuSample {
     /// Count of samples read since the driver started (wraps); a gap in the
     /// sequence seen by the caller means a missed period.
     pub sequence: u32,
+    /// The sample's own time stamp, µs (wraps), when the driver has one
+    /// (e.g. the chip's timestamp register or a data-ready capture). The
+    /// monitor task then takes `dt` from the difference of two stamps read
+    /// instead of the task's measured period.
+    pub timestamp_us: Option<u32>,
 }
 
 impl ImuSample {

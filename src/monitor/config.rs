@@ -85,8 +85,20 @@ pub struct UkfMonitorConfig<T> {
     pub sigma: SigmaParams,
     /// Aiding outlier gate in σ (single-epoch spikes are rejected).
     pub gate_sigma: T,
-    /// Longest run of consecutive gate rejections before fusing again.
+    /// Longest run of consecutive gate rejections of an aiding channel; the
+    /// next epoch is fused (a persistent innovation is what an IMU fault
+    /// looks like), unless its innovation is beyond `realign_innovation`.
     pub gate_max_rejections: u8,
+    /// Largest innovation per aiding channel (m/s, rad) fused after
+    /// `gate_max_rejections` rejections: beyond it, the channel's triad
+    /// (velocity or attitude) is re-aligned to the aiding with its covariance
+    /// reset instead of fusing the outlier.
+    pub realign_innovation: MeasVec<T>,
+    /// Physical range of an aiding velocity component, m/s: a larger (or
+    /// non-finite) value is never fused and raises
+    /// [`Health::aiding_invalid`](super::Health::aiding_invalid). Attitude
+    /// aiding must be finite and within ±π.
+    pub max_aiding_speed: T,
     /// Per-tail significance of the windowed t-test.
     pub alpha: f64,
     /// Windowed outlier removal (SPEC §5): samples beyond this many window σ
@@ -168,6 +180,15 @@ impl<T: Real> UkfMonitorConfig<T> {
             sigma: SigmaParams::default(),
             gate_sigma: T::lit(8.0),
             gate_max_rejections: 2,
+            max_aiding_speed: T::lit(100.0),
+            realign_innovation: MeasVec::new(
+                T::lit(5.0),
+                T::lit(5.0),
+                T::lit(5.0),
+                T::lit(20.0 * deg),
+                T::lit(20.0 * deg),
+                T::lit(20.0 * deg),
+            ),
             alpha: 1e-6,
             outlier_k: T::zero(),
             statistic: Statistic::Normalized,
@@ -244,7 +265,7 @@ impl<T: Real> UkfMonitorConfig<T> {
     pub fn validate(&self) -> Result<(), ConfigError> {
         let pos = |v: T| v.finite() && v > T::zero();
         let non_neg = |v: T| v.finite() && v >= T::zero();
-        let positive: [(&'static str, bool); 9] = [
+        let positive: [(&'static str, bool); 11] = [
             (
                 "process_noise",
                 self.process_noise.psd.iter().all(|v| pos(*v)),
@@ -257,6 +278,11 @@ impl<T: Real> UkfMonitorConfig<T> {
             ("drift_tau_s", pos(self.drift_tau_s)),
             ("aiding_timeout_s", pos(self.aiding_timeout_s)),
             ("gravity", pos(self.gravity)),
+            ("max_aiding_speed", pos(self.max_aiding_speed)),
+            (
+                "realign_innovation",
+                self.realign_innovation.iter().all(|v| pos(*v)),
+            ),
         ];
         if let Some(&(field, _)) = positive.iter().find(|(_, ok)| !ok) {
             return Err(ConfigError::NonPositive(field));

@@ -63,6 +63,28 @@ pub(crate) fn usable_aiding<T: Real>(aiding: &Measurement<T>) -> [bool; NZ] {
     available
 }
 
+/// The aiding with every channel outside its physical range withdrawn:
+/// velocity components beyond `max_speed` (m/s), angles beyond ±π, anything
+/// not finite. The flag says whether a present channel was withdrawn.
+pub(crate) fn aiding_in_range<T: Real>(
+    aiding: &Measurement<T>,
+    max_speed: T,
+) -> (Measurement<T>, bool) {
+    let mut out = *aiding;
+    let mut invalid = false;
+    for (i, (a, z)) in out.available.iter_mut().zip(aiding.z.iter()).enumerate() {
+        if !*a {
+            continue;
+        }
+        let limit = if i < 3 { max_speed } else { T::pi() };
+        if !(z.finite() && z.abs() <= limit) {
+            *a = false;
+            invalid = true;
+        }
+    }
+    (out, invalid)
+}
+
 /// The gyro rates of a (bias-corrected) sample for the lever-arm term; zero
 /// for an invalid sample, which must not reach the state through it.
 pub(crate) fn lever_arm_rates<T: Real>(in_range: bool, imu: &ImuVec<T>) -> Vector3<T> {

@@ -15,5 +15,7 @@ pub use otsukf_monitor::{OtsReport, OtsukfConfig, OtsukfMonitor};
 pub use report::{ChannelState, Health, Phase, Report};
 #[allow(deprecated)] // the former name, kept for users
 pub use task::Monitor;
-pub use task::{MonitorTask, PeriodicMonitor, TaskReport, Verdict};
+pub use task::{
+    MonitorTask, PeriodicMonitor, TaskReport, TaskStatus, Verdict, MAX_CONSECUTIVE_FAILURES,
+};
 pub use ukf_monitor::{UkfMonitor, DEFAULT_WINDOW, MAX_DELAY_STEPS};

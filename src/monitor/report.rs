@@ -63,6 +63,13 @@ pub struct Health {
     pub covariance_reset: bool,
     /// At least one aiding channel was rejected by the outlier gate.
     pub aiding_rejected: bool,
+    /// At least one aiding channel was outside its physical range (or not
+    /// finite); it was not used.
+    pub aiding_invalid: bool,
+    /// After `gate_max_rejections` gate rejections in a row, an aiding
+    /// innovation beyond `realign_innovation`: its triad's states were
+    /// re-aligned to the aiding (covariance reset) instead of fusing it.
+    pub aiding_realigned: bool,
 }
 
 /// Everything the monitor says about one period.

@@ -7,11 +7,35 @@ use super::{
 use crate::imu::Imu;
 use crate::model::{ImuVec, Measurement};
 
+/// Consecutive failed reads after which the task reports
+/// [`TaskStatus::ImuUnavailable`]: the monitor's prediction would span a gap
+/// (more than 5 nominal periods), so it is not monitoring any more.
+pub const MAX_CONSECUTIVE_FAILURES: u32 = 5;
+
+/// Whether the task could run the monitor this period.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum TaskStatus {
+    /// A sample was read and the monitor stepped.
+    #[default]
+    Running,
+    /// The read failed this period: the monitor was not stepped (its time
+    /// and any aiding are carried to the next good sample); the verdict is
+    /// the last one.
+    ReadFailed,
+    /// [`MAX_CONSECUTIVE_FAILURES`] or more reads in a row failed: the
+    /// monitor cannot run, every channel is reported
+    /// [`ChannelState::NotMonitored`] until a sample is read again.
+    ImuUnavailable,
+}
+
 /// What the task says about one period: small, `Copy`, plain arrays, so it
 /// can be logged with defmt or sent over a link as it is.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TaskReport {
+    /// Whether the monitor ran this period.
+    pub task_status: TaskStatus,
     /// Life-cycle phase of the monitor.
     pub phase: Phase,
     /// Verdict per channel `[a_x, a_y, a_z, p, q, r]`.
@@ -20,13 +44,17 @@ pub struct TaskReport {
     pub fault_estimate: [f32; 6],
     /// The last good IMU sample corrected for nominal bias and flagged faults.
     pub corrected: [f32; 6],
-    /// Input and numerical health of this period.
+    /// Input and numerical health of the last monitor step.
     pub health: Health,
     /// The IMU read failed this period (bus error, no data).
     pub read_failed: bool,
     /// IMU reads that failed since start.
     pub read_failures: u32,
-    /// Samples the driver's sequence counter says were skipped since start.
+    /// Failed reads in a row up to this period (0 after a good read).
+    pub consecutive_failures: u32,
+    /// Samples the monitor never saw since start: every failed read, plus
+    /// any further gap the driver's sequence counter reveals (a sample is
+    /// counted once even when both show it).
     pub missed_samples: u32,
 }
 
@@ -87,11 +115,17 @@ impl PeriodicMonitor for OtsukfMonitor<f32> {
 pub struct MonitorTask<I, M = UkfMonitor<f32>> {
     imu: I,
     ukf: M,
+    /// Measured time since the last good sample (the caller's periods).
     pending_dt: f32,
+    /// Aiding that arrived while reads failed, for the next good sample.
+    held_aiding: Measurement<f32>,
     last_sequence: Option<u32>,
+    last_timestamp_us: Option<u32>,
     read_failures: u32,
+    consecutive_failures: u32,
     missed_samples: u32,
     last_corrected: [f32; 6],
+    last_verdict: Option<Verdict>,
 }
 
 /// The task's former name.
@@ -115,10 +149,14 @@ impl<I: Imu, M: PeriodicMonitor> MonitorTask<I, M> {
             imu,
             ukf: monitor,
             pending_dt: 0.0,
+            held_aiding: Measurement::none(),
             last_sequence: None,
+            last_timestamp_us: None,
             read_failures: 0,
+            consecutive_failures: 0,
             missed_samples: 0,
             last_corrected: [0.0; 6],
+            last_verdict: None,
         }
     }
 
@@ -133,49 +171,99 @@ impl<I: Imu, M: PeriodicMonitor> MonitorTask<I, M> {
     }
 
     /// One period: `dt` is the measured time since the previous call and
-    /// `aiding` whatever arrived in it. A failed read does not stop the
-    /// monitor: aiding is still processed, and the elapsed time is carried
-    /// to the next good sample so its prediction spans the whole gap (the
-    /// monitor treats more than 5 periods as a gap and reports it).
+    /// `aiding` whatever arrived in it.
+    ///
+    /// The monitor is stepped once per sample actually read, with the time
+    /// since the previous sample read: the difference of the samples' own
+    /// time stamps when the driver provides them
+    /// ([`ImuSample::timestamp_us`](crate::imu::ImuSample::timestamp_us)),
+    /// otherwise the sum of the measured periods since the last good read.
+    /// A failed read does not step the monitor (so no time is counted
+    /// twice); it is counted in `missed_samples`, its aiding is held for the
+    /// next good sample (newest value per channel), and the report carries
+    /// the last verdict with [`TaskStatus::ReadFailed`], or
+    /// [`TaskStatus::ImuUnavailable`] with no channel monitored once
+    /// [`MAX_CONSECUTIVE_FAILURES`] reads in a row have failed.
     pub fn step(&mut self, dt: f32, aiding: &Measurement<f32>) -> TaskReport {
         self.pending_dt += if dt.is_finite() && dt > 0.0 { dt } else { 0.0 };
-        let (sample, read_failed) = match self.imu.read() {
+        self.hold_aiding(aiding);
+        match self.imu.read() {
             Ok(s) => {
+                let failed_before = self.consecutive_failures;
+                self.consecutive_failures = 0;
                 if let Some(prev) = self.last_sequence {
+                    // Samples the sequence says were skipped, beyond the
+                    // failed reads already counted.
                     let gap = s.sequence.wrapping_sub(prev).saturating_sub(1);
-                    self.missed_samples = self.missed_samples.saturating_add(gap);
+                    let extra = gap.saturating_sub(failed_before);
+                    self.missed_samples = self.missed_samples.saturating_add(extra);
                 }
                 self.last_sequence = Some(s.sequence);
-                (Some(ImuVec::from(s.channels())), false)
+                let sample_dt = match (s.timestamp_us, self.last_timestamp_us) {
+                    (Some(now), Some(prev)) => now.wrapping_sub(prev) as f32 * 1e-6,
+                    _ => self.pending_dt,
+                };
+                self.last_timestamp_us = s.timestamp_us;
+                self.pending_dt = 0.0;
+                let held = core::mem::replace(&mut self.held_aiding, Measurement::none());
+                let u = ImuVec::from(s.channels());
+                let v = self.ukf.step_period(&u, sample_dt, &held);
+                self.last_corrected = v.corrected_imu.into();
+                self.last_verdict = Some(v);
+                self.report(TaskStatus::Running, &v, false)
             }
             Err(_) => {
                 self.read_failures = self.read_failures.saturating_add(1);
-                (None, true)
+                self.consecutive_failures = self.consecutive_failures.saturating_add(1);
+                self.missed_samples = self.missed_samples.saturating_add(1);
+                let status = if self.consecutive_failures >= MAX_CONSECUTIVE_FAILURES {
+                    TaskStatus::ImuUnavailable
+                } else {
+                    TaskStatus::ReadFailed
+                };
+                let mut v = self.last_verdict.unwrap_or(Verdict {
+                    phase: Phase::Aligning,
+                    status: [ChannelState::NotMonitored; 6],
+                    fault_estimate: ImuVec::zeros(),
+                    corrected_imu: ImuVec::zeros(),
+                    health: Health::default(),
+                });
+                if status == TaskStatus::ImuUnavailable {
+                    v.status = [ChannelState::NotMonitored; 6];
+                }
+                self.report(status, &v, true)
             }
-        };
-        let report = match sample {
-            Some(u) => {
-                let dt = self.pending_dt;
-                self.pending_dt = 0.0;
-                self.ukf.step_period(&u, dt, aiding)
-            }
-            // No sample: let the monitor process the aiding and report; its
-            // prediction is skipped (NaN is rejected as invalid input).
-            None => self
-                .ukf
-                .step_period(&ImuVec::from_element(f32::NAN), dt, aiding),
-        };
-        if sample.is_some() {
-            self.last_corrected = report.corrected_imu.into();
         }
+    }
+
+    /// Keeps the newest value of every aiding channel that arrived since the
+    /// last good sample.
+    fn hold_aiding(&mut self, aiding: &Measurement<f32>) {
+        for ((h, a), (hz, z)) in self
+            .held_aiding
+            .available
+            .iter_mut()
+            .zip(aiding.available.iter())
+            .zip(self.held_aiding.z.iter_mut().zip(aiding.z.iter()))
+        {
+            if *a {
+                *h = true;
+                *hz = *z;
+            }
+        }
+    }
+
+    fn report(&self, task_status: TaskStatus, v: &Verdict, read_failed: bool) -> TaskReport {
         TaskReport {
-            phase: report.phase,
-            status: report.status,
-            fault_estimate: report.fault_estimate.into(),
+            task_status,
+            phase: v.phase,
+            status: v.status,
+            fault_estimate: v.fault_estimate.into(),
             corrected: self.last_corrected,
-            health: report.health,
+            health: v.health,
             read_failed,
             read_failures: self.read_failures,
+            consecutive_failures: self.consecutive_failures,
             missed_samples: self.missed_samples,
         }
     }
