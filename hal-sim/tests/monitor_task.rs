@@ -342,3 +342,114 @@ fn sample_clock_and_unavailable_imu() {
     assert_eq!(r.missed_samples, 100);
     assert_eq!(r.consecutive_failures, 100);
 }
+
+/// A driver returning whatever sample the test put in its slot.
+struct ReplayImu {
+    sample: std::rc::Rc<core::cell::Cell<imu_fdi::imu::ImuSample>>,
+}
+
+impl imu_fdi::imu::Imu for ReplayImu {
+    type Error = ();
+    fn read(&mut self) -> Result<imu_fdi::imu::ImuSample, ()> {
+        Ok(self.sample.get())
+    }
+}
+
+/// GIVEN S2 with the IMU mounted upside down and yawed 90° on the vehicle
+/// (ArduPilot `ROLL_180_YAW_90`), WHEN the task is told the mounting, THEN
+/// every verdict and fault estimate is the one of a body-aligned IMU (to
+/// f32 rounding), and without the mounting the monitor flags at once.
+#[test]
+fn a_rotated_board_gives_the_body_aligned_verdicts_once_its_mounting_is_set() {
+    use imu_fdi::parity::euler_rotation;
+    let scn = Scenario::s2();
+    let board_to_body = euler_rotation(core::f32::consts::PI, 0.0, core::f32::consts::FRAC_PI_2);
+    let body_to_board = board_to_body.transpose();
+    let cfg = monitor_config(&scn, &RunOptions::default());
+    let blank = imu_fdi::imu::ImuSample {
+        accel: [0.0; 3],
+        gyro: [0.0; 3],
+        temperature: 25.0,
+        sequence: 0,
+        timestamp_us: None,
+    };
+    let slots: [std::rc::Rc<core::cell::Cell<_>>; 3] =
+        core::array::from_fn(|_| std::rc::Rc::new(core::cell::Cell::new(blank)));
+    let mut aligned = MonitorTask::with_monitor(
+        ReplayImu {
+            sample: slots[0].clone(),
+        },
+        imu_fdi::monitor::UkfMonitor::<f32>::new(cfg).unwrap(),
+    );
+    let mut rotated = MonitorTask::with_monitor(
+        ReplayImu {
+            sample: slots[1].clone(),
+        },
+        imu_fdi::monitor::UkfMonitor::<f32>::new(cfg).unwrap(),
+    )
+    .with_mounting(board_to_body)
+    .unwrap();
+    let mut unmounted = MonitorTask::with_monitor(
+        ReplayImu {
+            sample: slots[2].clone(),
+        },
+        imu_fdi::monitor::UkfMonitor::<f32>::new(cfg).unwrap(),
+    );
+    let (mut n, mut worst, mut differing, mut unmounted_flags) = (0u32, 0.0f32, 0u32, 0u32);
+    for s in Simulator::new(&scn, 1) {
+        let imu = s.imu.unwrap();
+        let a = nalgebra::Vector3::new(imu[0] as f32, imu[1] as f32, imu[2] as f32);
+        let g = nalgebra::Vector3::new(imu[3] as f32, imu[4] as f32, imu[5] as f32);
+        let (ab, gb) = (body_to_board * a, body_to_board * g);
+        n += 1;
+        let body = imu_fdi::imu::ImuSample {
+            accel: a.into(),
+            gyro: g.into(),
+            sequence: n,
+            ..blank
+        };
+        let board = imu_fdi::imu::ImuSample {
+            accel: ab.into(),
+            gyro: gb.into(),
+            sequence: n,
+            ..blank
+        };
+        let z = MeasVec::from_fn(|i, _| s.aiding[i] as f32);
+        let m = Measurement {
+            z,
+            available: s.aiding_available,
+        };
+        let dt = s.dt as f32;
+        slots[0].set(body);
+        slots[1].set(board);
+        slots[2].set(board);
+        let (ra, rr, ru) = (
+            aligned.step(dt, &m),
+            rotated.step(dt, &m),
+            unmounted.step(dt, &m),
+        );
+        if ra.status != rr.status {
+            differing += 1;
+        }
+        for (x, y) in ra.fault_estimate.iter().zip(rr.fault_estimate.iter()) {
+            worst = worst.max((x - y).abs());
+        }
+        if ru.status.iter().any(|c| c.sign().is_some()) {
+            unmounted_flags += 1;
+        }
+    }
+    assert_eq!(differing, 0);
+    assert!(worst < 1e-3, "{worst}");
+    assert!(rotated.mounting() == &board_to_body);
+    // Not told the mounting, the monitor sees gravity upside down: flags.
+    assert!(unmounted_flags > 1000, "{unmounted_flags}");
+    // A reflection is not a mounting.
+    let mirror = nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0f32, 1.0, -1.0));
+    let t = MonitorTask::with_monitor(
+        ReplayImu {
+            sample: slots[0].clone(),
+        },
+        imu_fdi::monitor::UkfMonitor::<f32>::new(cfg).unwrap(),
+    );
+    assert!(t.with_mounting(mirror).is_err());
+}

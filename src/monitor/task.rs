@@ -126,6 +126,9 @@ pub struct MonitorTask<I, M = UkfMonitor<f32>> {
     missed_samples: u32,
     last_corrected: [f32; 6],
     last_verdict: Option<Verdict>,
+    /// Board → body rotation applied to every sample (identity: the IMU's
+    /// axes are the body's).
+    mounting: nalgebra::Matrix3<f32>,
 }
 
 /// The task's former name.
@@ -157,7 +160,38 @@ impl<I: Imu, M: PeriodicMonitor> MonitorTask<I, M> {
             missed_samples: 0,
             last_corrected: [0.0; 6],
             last_verdict: None,
+            mounting: nalgebra::Matrix3::identity(),
         }
+    }
+
+    /// The IMU is mounted rotated on the vehicle: `board_to_body` rotates
+    /// the chip's axes into the body frame (FRD), as PX4's `SENS_BOARD_ROT`
+    /// and ArduPilot's `AHRS_ORIENTATION` do — e.g.
+    /// [`euler_rotation`](crate::parity::euler_rotation)`(π, 0, 0)` for a
+    /// board mounted upside down (`ROLL_180`). Applied to the accelerometer
+    /// and the gyro of every sample before the monitor sees it, so the
+    /// verdict, the fault estimate and the corrected sample are in the body
+    /// frame. A matrix that is not a rotation (not orthonormal within 1e-3,
+    /// or a reflection) is refused and the mounting left unchanged.
+    pub fn with_mounting(
+        mut self,
+        board_to_body: nalgebra::Matrix3<f32>,
+    ) -> Result<Self, ConfigError> {
+        let orthonormal = (board_to_body.transpose() * board_to_body
+            - nalgebra::Matrix3::identity())
+        .iter()
+        .all(|e| e.abs() < 1e-3);
+        let det = board_to_body.determinant();
+        if !(orthonormal && det > 0.999 && det < 1.001) {
+            return Err(ConfigError::OutOfRange("mounting"));
+        }
+        self.mounting = board_to_body;
+        Ok(self)
+    }
+
+    /// The board → body rotation in use.
+    pub fn mounting(&self) -> &nalgebra::Matrix3<f32> {
+        &self.mounting
     }
 
     /// The monitor (for its filter, configuration, …).
@@ -206,7 +240,9 @@ impl<I: Imu, M: PeriodicMonitor> MonitorTask<I, M> {
                 self.last_timestamp_us = s.timestamp_us;
                 self.pending_dt = 0.0;
                 let held = core::mem::replace(&mut self.held_aiding, Measurement::none());
-                let u = ImuVec::from(s.channels());
+                let a = self.mounting * nalgebra::Vector3::from(s.accel);
+                let g = self.mounting * nalgebra::Vector3::from(s.gyro);
+                let u = ImuVec::from([a.x, a.y, a.z, g.x, g.y, g.z]);
                 let v = self.ukf.step_period(&u, sample_dt, &held);
                 self.last_corrected = v.corrected_imu.into();
                 self.last_verdict = Some(v);
