@@ -216,6 +216,7 @@ pub(crate) fn parity_replay_cmd(
                 train_s,
                 inject_at,
                 &injection_sizes(kind),
+                method,
             )?;
             let cell = |v: Option<(f64, f64)>, star: bool| {
                 v.map_or("-".to_string(), |(s, d)| {

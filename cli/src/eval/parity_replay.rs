@@ -363,6 +363,7 @@ pub fn injection_sweep(
     train_s: f64,
     onsets: &[f64],
     sizes: &[f64],
+    method: ParityMethod,
 ) -> Result<Vec<InjectionResult>> {
     let channel0 = match kind {
         ArrayKind::Gyro => 3,
@@ -388,7 +389,7 @@ pub fn injection_sweep(
                         start: onset,
                         end: f64::INFINITY,
                     };
-                    let r = replay_parity(log, kind, train_start, train_s, Some(inj))?;
+                    let r = replay_parity_with(log, kind, train_start, train_s, Some(inj), method)?;
                     let first = |list: &[(f64, f64, Option<usize>)]| {
                         if list.iter().any(|a| a.0 < onset) {
                             return None;
