@@ -238,8 +238,10 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
 
     /// `φᵀ (sxx + ridge)⁻¹ φ`: the calibration's prediction variance of a
     /// (mean) regressor, in units of the block covariance.
-    fn prediction_weight(&self, phi: &Phi<T>) -> T {
-        let Some(l) = self.calibration_factor() else {
+    /// `l` is the factor of [`calibration_factor`](Self::calibration_factor),
+    /// computed once per block by the caller (`None`: no prediction term).
+    fn prediction_weight(l: Option<&SMatrix<T, REGRESSORS, REGRESSORS>>, phi: &Phi<T>) -> T {
+        let Some(l) = l else {
             return T::zero();
         };
         // ‖L⁻¹ φ‖² by forward substitution.
@@ -438,6 +440,9 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         };
         self.push(&clipped, r, phi);
         let means = self.window_means();
+        // The calibration factor is the same for every window length this
+        // block (it changes only when the block is learned, below).
+        let cal = self.calibration_factor();
         let mut best_ratio = T::zero();
         let mut isolate: Option<(usize, T)> = None;
         for (i, ((m, cov), h)) in means
@@ -449,7 +454,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             let Some((rbar, phibar)) = m else {
                 continue;
             };
-            let total = cov + self.block_cov * self.prediction_weight(phibar);
+            let total = cov + self.block_cov * Self::prediction_weight(cal.as_ref(), phibar);
             let Ok(l) = cholesky(&pad(&total, self.dim)) else {
                 continue;
             };
