@@ -119,10 +119,9 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             }
             return;
         }
-        let Some(r) = ms.residual(p, &phi) else {
+        let Some(mut d) = ms.decide(p, &phi, &v, &active) else {
             return;
         };
-        let mut d = ms.decide(p, &phi, &r, &v, &active);
         // A relative bias the calibration holds beyond the offset limit is
         // a fault present since power-up (or since training).
         if d.ratio <= T::one() {
@@ -153,17 +152,6 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             }
             return;
         };
-        self.suspect_run = match self.suspect_run {
-            (Some(j), n) if j == k => (Some(k), n.saturating_add(1)),
-            _ => (Some(k), 1),
-        };
-        if self.suspect_run.1 >= self.cfg.isolate_after {
-            if let Some(h) = self.health.get_mut(k) {
-                h.isolate();
-            }
-            self.exclude(k);
-            report.isolated = Some(k);
-            report.fault = false;
-        }
+        self.vote_to_isolate(k, report);
     }
 }

@@ -351,6 +351,26 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         self.scales
     }
 
+    /// One more alarmed decision naming sensor `k` (both detectors): after
+    /// `isolate_after` in a row it is isolated, removed from the set and
+    /// the alarm cleared. True when it was isolated now.
+    fn vote_to_isolate(&mut self, k: usize, report: &mut ParityReport<T, N>) -> bool {
+        self.suspect_run = match self.suspect_run {
+            (Some(j), n) if j == k => (Some(k), n.saturating_add(1)),
+            _ => (Some(k), 1),
+        };
+        if self.suspect_run.1 < self.cfg.isolate_after {
+            return false;
+        }
+        if let Some(h) = self.health.get_mut(k) {
+            h.isolate();
+        }
+        self.exclude(k);
+        report.isolated = Some(k);
+        report.fault = false;
+        true
+    }
+
     /// Removes sensor `k` from the set and carries the learned baseline
     /// into the reduced parity space.
     fn exclude(&mut self, k: usize) {

@@ -188,17 +188,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             self.suspect_run = (None, 0);
             return;
         }
-        self.suspect_run = match self.suspect_run {
-            (Some(j), n) if j == k => (Some(k), n.saturating_add(1)),
-            _ => (Some(k), 1),
-        };
-        if self.suspect_run.1 >= self.cfg.isolate_after {
-            if let Some(h) = self.health.get_mut(k) {
-                h.isolate();
-            }
-            self.exclude(k);
-            report.isolated = Some(k);
-            report.fault = false;
+        if self.vote_to_isolate(k, report) {
             report.flags = DetectorFlags::default();
         }
     }

@@ -230,8 +230,17 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// Prior residual `p̄ − C φ` of a block (before it is learned) and the
     /// Cholesky factor used, `None` when the calibration cannot be solved.
     pub fn residual(&self, p: &SVector<T, N>, phi: &Phi<T>) -> Option<SVector<T, N>> {
-        let l = self.calibration_factor()?;
-        let c = cholesky_solve_right(&l, &self.spx);
+        self.residual_with(&self.calibration_factor()?, p, phi)
+    }
+
+    /// [`residual`](Self::residual) with the calibration's factor given.
+    fn residual_with(
+        &self,
+        l: &SMatrix<T, REGRESSORS, REGRESSORS>,
+        p: &SVector<T, N>,
+        phi: &Phi<T>,
+    ) -> Option<SVector<T, N>> {
+        let c = cholesky_solve_right(l, &self.spx);
         let r = p - c * phi;
         r.iter().all(|x| x.finite()).then_some(r)
     }
@@ -415,20 +424,25 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         (bias.abs() > self.cfg.offset_limit).then_some((k, bias, margin))
     }
 
-    /// One monitoring block: clips and stores the prior residual `r`, tests
-    /// every window length, and learns from the block when every score is
-    /// quiet. `p` and `phi` are the block's parity vector and regressor.
+    /// One monitoring block with parity vector `p` and regressor `phi`:
+    /// clips and stores its prior residual, tests every window length, and
+    /// learns from the block when every score is quiet. `None` when the
+    /// calibration cannot be solved (the block is skipped).
     pub fn decide(
         &mut self,
         p: &SVector<T, N>,
         phi: &Phi<T>,
-        r: &SVector<T, N>,
         v: &SMatrix<T, N, N>,
         active: &[bool; N],
-    ) -> MultiscaleDecision<T> {
+    ) -> Option<MultiscaleDecision<T>> {
+        // One factorisation of the calibration per block: the residual and
+        // the prediction variance of every window length use it (it changes
+        // only when the block is learned, at the end).
+        let cal = self.calibration_factor()?;
+        let r = &self.residual_with(&cal, p, phi)?;
         let mut out = MultiscaleDecision::default();
         let Ok(lb) = cholesky(&self.block_cov) else {
-            return out;
+            return Some(out);
         };
         // Huber: bound the block's Mahalanobis norm.
         let norm = mahalanobis2(&lb, r).sqrt();
@@ -440,9 +454,6 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         };
         self.push(&clipped, r, phi);
         let means = self.window_means();
-        // The calibration factor is the same for every window length this
-        // block (it changes only when the block is learned, below).
-        let cal = self.calibration_factor();
         let mut best_ratio = T::zero();
         let mut isolate: Option<(usize, T)> = None;
         for (i, ((m, cov), h)) in means
@@ -454,7 +465,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             let Some((rbar, phibar)) = m else {
                 continue;
             };
-            let total = cov + self.block_cov * Self::prediction_weight(cal.as_ref(), phibar);
+            let total = cov + self.block_cov * Self::prediction_weight(Some(&cal), phibar);
             let Ok(l) = cholesky(&pad(&total, self.dim)) else {
                 continue;
             };
@@ -505,7 +516,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         if !best_ratio.finite() {
             out.ratio = T::zero();
             out.suspect = None;
-            return out;
+            return Some(out);
         }
         // Learn only from quiet blocks, and only once the longest window
         // has been quiet throughout (a fault's onset must not be learned
@@ -532,7 +543,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                 }
             }
         }
-        out
+        Some(out)
     }
 
     /// Forgets the window (after a reconfiguration) and re-arms the quiet
