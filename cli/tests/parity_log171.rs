@@ -76,9 +76,10 @@ fn gyros_are_quiet_in_normal_flight_from_any_training_start_and_flag_the_crash()
 fn accelerometer_false_alarms_in_normal_flight_stay_as_measured() {
     // On this 2015 board the a_z of the three IMUs part by up to 2 m/s² for
     // seconds under vibration; the rectification regressors remove most of
-    // it but not all. Measured over nine training starts (60, 65, …, 100 s):
-    // 1 alarm event before the crash (0.3 s at 147.8 s, training from
-    // 75 s), no sensor isolated.
+    // it but not all, and the vibration-scaled residuals (multiscale::scale)
+    // do not count a loud block as much as a calm one. Measured over nine
+    // training starts (60, 65, …, 100 s): no alarm before the crash, no
+    // sensor isolated (before the scaling: one 0.3-s alarm).
     let log = log();
     let (mut events, mut isolations) = (0, 0);
     for ts in [60.0, 65.0, 70.0, 75.0, 80.0, 85.0, 90.0, 95.0, 100.0] {
@@ -86,7 +87,7 @@ fn accelerometer_false_alarms_in_normal_flight_stay_as_measured() {
         events += r.alarms.iter().filter(|a| a.0 < CRASH).count();
         isolations += r.isolations.iter().filter(|a| a.1 < CRASH).count();
     }
-    assert!(events <= 1, "{events}");
+    assert!(events == 0, "{events}");
     assert!(isolations == 0, "{isolations}");
 }
 
@@ -125,16 +126,16 @@ fn injected_gyro_steps_are_isolated_at_the_measured_rates() {
     )
     .unwrap();
     let axis = |a: usize| move |c: &StepCase| c.injection.channel == 3 + a;
-    // 1 °/s, measured: z 156/174, y 108/174, x 1/174 (IMU0's x gyro reads
+    // 1 °/s, measured: z 160/174, y 129/174, x 9/174 (IMU0's x gyro reads
     // 12 °/s of aliased vibration per sample: with it, a step on IMU1 or
     // IMU2 x cannot be told from the opposite step on the other one within
-    // 10 s at the isolation margin); 8 cases with a false alarm.
+    // 10 s at the isolation margin); 9 cases with a false alarm.
     let (z, n) = passes(&cases, axis(2));
-    assert!(z >= 154 && n == 174, "{z}/{n}");
+    assert!(z >= 158 && n == 174, "{z}/{n}");
     let (y, _) = passes(&cases, axis(1));
-    assert!(y >= 106, "{y}");
+    assert!(y >= 127, "{y}");
     let fa = cases.iter().filter(|c| c.false_alarm).count();
-    assert!(fa <= 8, "{fa}");
+    assert!(fa <= 9, "{fa}");
     // Every IMU is covered: z steps on each IMU isolated in ≥ 45 of 58 cases.
     for imu in 0..3 {
         let (ok, _) = passes(&cases, |c| {
@@ -162,15 +163,15 @@ fn injected_accelerometer_steps_are_isolated_at_the_measured_rates() {
         CRASH,
     )
     .unwrap();
-    // 0.3 m/s², measured: x 156/174, y 164/174, z 76/174 (the a_z
-    // vibration events above), no case with a false alarm.
+    // 0.3 m/s², measured: x 148/174, y 165/174, z 104/174 (the a_z
+    // vibration events above), 2 cases with a false alarm.
     let axis = |a: usize| move |c: &StepCase| c.injection.channel == a;
     let (x, _) = passes(&cases, axis(0));
     let (y, _) = passes(&cases, axis(1));
     let (z, _) = passes(&cases, axis(2));
-    assert!(x >= 154 && y >= 162 && z >= 74, "{x} {y} {z}");
+    assert!(x >= 146 && y >= 163 && z >= 102, "{x} {y} {z}");
     let fa = cases.iter().filter(|c| c.false_alarm).count();
-    assert!(fa <= 1, "{fa}");
+    assert!(fa <= 2, "{fa}");
     for imu in 0..3 {
         let (ok, _) = passes(&cases, |c| {
             c.injection.imu == imu && c.injection.channel < 2

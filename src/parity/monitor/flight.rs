@@ -98,6 +98,9 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             }
         });
         let phi: SVector<T, REGRESSORS> = ms.regressor(x, dx, &e);
+        // The block's vibration level: the RMS spread of the sensors within
+        // it (what the residual's variance follows, see `multiscale::scale`).
+        let level = e.sum().max(T::zero()).sqrt();
         if !self.ms_trained {
             self.ms_blocks = self.ms_blocks.saturating_add(1);
             if self.ms_blocks <= train_blocks * 2 / 3 {
@@ -105,7 +108,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                 return;
             }
             if let Some(r) = ms.residual(p, &phi) {
-                ms.train_residual(&r, &phi);
+                ms.train_residual(&r, &phi, level);
             }
             ms.learn_calibration(p, &phi, false);
             if self.ms_blocks >= train_blocks {
@@ -119,7 +122,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             }
             return;
         }
-        let Some(mut d) = ms.decide(p, &phi, &v, &active) else {
+        let Some(mut d) = ms.decide(p, &phi, level, &v, &active) else {
             return;
         };
         // A relative bias the calibration holds beyond the offset limit is
@@ -139,15 +142,25 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         }
         report.decision = true;
         report.multiscale = d;
-        report.fault = d.ratio > T::one();
+        // The alarm holds for one shortest window after the last decision
+        // above threshold: when a fault ends, the windows still hold its
+        // blocks for up to the longest length, and a score hovering at the
+        // threshold would otherwise flicker into new alarm events.
+        let above = d.ratio > T::one();
+        self.ms_hold = if above {
+            cfg.scales[0]
+        } else {
+            self.ms_hold.saturating_sub(1)
+        };
+        report.fault = above || self.ms_hold > 0;
         report.suspect = d.suspect;
         report.bias_estimate = d.bias;
         let candidate = d
             .isolate
-            .filter(|(k, m)| report.fault && *m >= cfg.isolation_margin && self.space.isolable(*k))
+            .filter(|(k, m)| above && *m >= cfg.isolation_margin && self.space.isolable(*k))
             .map(|(k, _)| k);
         let Some(k) = candidate else {
-            if !report.fault {
+            if !above {
                 self.suspect_run = (None, 0);
             }
             return;

@@ -133,6 +133,9 @@ pub struct ParityMonitor<T: Real, const N: usize, const W: usize> {
     ms_prev2: Option<Vector3<T>>,
     /// Blocks seen since (re)training began.
     ms_blocks: u32,
+    /// Blocks the multi-scale alarm still holds after its last decision
+    /// above threshold.
+    ms_hold: u16,
     ms_trained: bool,
 }
 
@@ -209,6 +212,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             ms: None,
             ms_block: BlockSums::default(),
             ms_prev: None,
+            ms_hold: 0,
             ms_prev2: None,
             ms_blocks: 0,
             ms_trained: false,
@@ -390,6 +394,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         self.ms_block = BlockSums::default();
         self.ms_prev = None;
         self.ms_prev2 = None;
+        self.ms_hold = 0;
         match self.space.without(k) {
             Ok(sub) => {
                 let c = self.space.transition_to(&sub);

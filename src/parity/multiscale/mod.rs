@@ -52,9 +52,12 @@ use crate::stats::student_t_upper_quantile;
 
 mod config;
 mod glr;
+mod scale;
+mod training;
 
 pub use config::MultiscaleConfig;
 use glr::{best_two, mahalanobis2, pad};
+use scale::VibrationScale;
 
 /// Sensors whose own vibration energy is a regressor (the first nine).
 pub const VIBRATION_REGRESSORS: usize = 9;
@@ -65,6 +68,8 @@ pub const REGRESSORS: usize = 7 + VIBRATION_REGRESSORS;
 pub const SCALES: usize = 3;
 
 type Phi<T> = SVector<T, REGRESSORS>;
+/// A window's mean residual, mean regressor and mean gain.
+type WindowMean<T, const N: usize> = (SVector<T, N>, Phi<T>, T);
 
 /// One decision of the multi-scale tests.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -107,9 +112,21 @@ pub struct Multiscale<T: Real, const N: usize, const W: usize> {
     block_cov: SMatrix<T, N, N>,
     /// Covariance of the window mean at each length.
     window_cov: [SMatrix<T, N, N>; SCALES],
-    /// Clipped residuals and regressors of the last `W` blocks.
+    /// Vibration scale model `ŝ(x) = a + c x` of the block residual's
+    /// variance against the block's vibration level `x` (see
+    /// [`VibrationScale`]).
+    scale: VibrationScale<T>,
+    /// Clipped (standardised) residuals and regressors of the last `W`
+    /// blocks.
     residuals: [SVector<T, N>; W],
-    /// The same residuals unclipped (for the gross test).
+    /// `1/√ŝ` of each stored block: a bias `b` shows in the standardised
+    /// window mean as `b` times the mean of these.
+    gains: [T; W],
+    /// Vibration level of each stored block (the fit at the end of
+    /// training needs them).
+    levels: [T; W],
+    /// The same residuals unclipped and not standardised (for the gross
+    /// test).
     raw: [SVector<T, N>; W],
     /// Covariance updates so far (the EWMA weight is `1/min(updates,
     /// variance_blocks)`).
@@ -161,7 +178,10 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             x_ref: None,
             block_cov: SMatrix::identity(),
             window_cov: [SMatrix::identity(); SCALES],
+            scale: VibrationScale::default(),
             residuals: [SVector::zeros(); W],
+            gains: [T::one(); W],
+            levels: [T::zero(); W],
             raw: [SVector::zeros(); W],
             updates: 0,
             regressors: [Phi::zeros(); W],
@@ -271,9 +291,15 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
 
     /// Pushes a clipped residual, the raw one and its regressor into the
     /// window.
-    fn push(&mut self, r: &SVector<T, N>, raw: &SVector<T, N>, phi: &Phi<T>) {
+    fn push(&mut self, r: &SVector<T, N>, raw: &SVector<T, N>, phi: &Phi<T>, gain: T, level: T) {
         if let Some(slot) = self.residuals.get_mut(self.head) {
             *slot = *r;
+        }
+        if let Some(slot) = self.gains.get_mut(self.head) {
+            *slot = gain;
+        }
+        if let Some(slot) = self.levels.get_mut(self.head) {
+            *slot = level;
         }
         if let Some(slot) = self.raw.get_mut(self.head) {
             *slot = *raw;
@@ -285,12 +311,13 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         self.filled = (self.filled + 1).min(W);
     }
 
-    /// Window means of residual and regressor over each length (newest
-    /// blocks), `None` for a length not yet filled.
-    fn window_means(&self) -> [Option<(SVector<T, N>, Phi<T>)>; SCALES] {
+    /// Window means of residual, regressor and gain over each length
+    /// (newest blocks), `None` for a length not yet filled.
+    fn window_means(&self) -> [Option<WindowMean<T, N>>; SCALES] {
         let mut out = [None; SCALES];
         let mut sr = SVector::<T, N>::zeros();
         let mut sp = Phi::<T>::zeros();
+        let mut sg = T::zero();
         let mut idx = self.head;
         let mut scale = 0;
         for n in 1..=self.filled {
@@ -299,90 +326,19 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                 sr += r;
                 sp += p;
             }
+            sg += self.gains.get(idx).copied().unwrap_or(T::one());
             while let Some(len) = self.cfg.scales.get(scale) {
                 if usize::from(*len) != n {
                     break;
                 }
                 let k = T::lit(n as f64);
                 if let Some(slot) = out.get_mut(scale) {
-                    *slot = Some((sr / k, sp / k));
+                    *slot = Some((sr / k, sp / k, sg / k));
                 }
                 scale += 1;
             }
         }
         out
-    }
-
-    /// Ends training: the residuals of the second half (already pushed with
-    /// [`train_residual`](Self::train_residual)) give the block covariance;
-    /// each window length starts from the block covariance scaled by the
-    /// correlation seen over the shortest window, with the weight of
-    /// `train_blocks` observations. `None` if degenerate.
-    pub fn finish_training(&mut self, train_blocks: u32) -> Option<()> {
-        let n = self.filled;
-        if n < 8 {
-            return None;
-        }
-        let mut mean = SVector::<T, N>::zeros();
-        for r in self.residuals.iter().take(n) {
-            mean += r;
-        }
-        mean /= T::lit(n as f64);
-        let mut cov = SMatrix::<T, N, N>::zeros();
-        for r in self.residuals.iter().take(n) {
-            let d = r - mean;
-            cov += d * d.transpose();
-        }
-        cov /= T::lit((n - 1) as f64);
-        self.block_cov = pad(&cov, self.dim);
-        cholesky(&self.block_cov).ok()?;
-        // Correlation factor over the shortest window that fits in training:
-        // variance of overlapping window means ÷ the white-noise value.
-        let len = usize::from(self.cfg.scales[0]).min(n / 2).max(1);
-        let mut factor_sum = T::zero();
-        let mut count = 0usize;
-        let l = cholesky(&self.block_cov).ok()?;
-        let mut start = 0;
-        while start + len <= n {
-            let mut s = SVector::<T, N>::zeros();
-            for r in self.residuals.iter().skip(start).take(len) {
-                s += r - mean;
-            }
-            let w = s / T::lit(len as f64);
-            factor_sum += mahalanobis2(&l, &w);
-            count += 1;
-            start += 1;
-        }
-        let dimf = T::lit(self.dim.max(1) as f64);
-        let factor = if count > 0 {
-            (factor_sum / T::lit(count as f64) * T::lit(len as f64) / dimf).max(T::one())
-        } else {
-            T::one()
-        };
-        // Training is too short to see how the longer windows wander (a
-        // 10-s mean of 20 s of data is two numbers), so every length starts
-        // at the shortest window's covariance: no more sensitive than that
-        // until the flight itself has shown the longer windows to be
-        // quieter (the covariances keep learning while every test is quiet).
-        let shortest = T::lit(f64::from(self.cfg.scales[0]));
-        for cov_n in self.window_cov.iter_mut() {
-            *cov_n = pad(&(cov * (factor / shortest)), self.dim);
-        }
-        self.filled = 0;
-        self.head = 0;
-        self.quiet_blocks = 0;
-        // The training estimate rests on the residual blocks that made it;
-        // each quiet block in flight then adds one, up to the fixed memory
-        // `variance_blocks`; the thresholds follow the degrees of freedom.
-        self.updates = n as u32;
-        let _ = train_blocks;
-        Some(())
-    }
-
-    /// A training block of the second half: its (unclipped) prior residual
-    /// is kept for the covariance.
-    pub fn train_residual(&mut self, r: &SVector<T, N>, phi: &Phi<T>) {
-        self.push(r, r, phi);
     }
 
     /// Mean of the newest `len` unclipped residuals.
@@ -432,6 +388,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         &mut self,
         p: &SVector<T, N>,
         phi: &Phi<T>,
+        level: T,
         v: &SMatrix<T, N, N>,
         active: &[bool; N],
     ) -> Option<MultiscaleDecision<T>> {
@@ -439,20 +396,26 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         // the prediction variance of every window length use it (it changes
         // only when the block is learned, at the end).
         let cal = self.calibration_factor()?;
-        let r = &self.residual_with(&cal, p, phi)?;
+        let raw_r = self.residual_with(&cal, p, phi)?;
+        // Standardised by the residual energy this vibration level predicts
+        // (see `scale`): the tests below all run on `r`.
+        let energy = self.scale.predict(level);
+        let gain = T::one() / energy.sqrt();
+        let r = &(raw_r * gain);
         let mut out = MultiscaleDecision::default();
         let Ok(lb) = cholesky(&self.block_cov) else {
             return Some(out);
         };
         // Huber: bound the block's Mahalanobis norm.
-        let norm = mahalanobis2(&lb, r).sqrt();
+        let norm2 = mahalanobis2(&lb, r);
+        let norm = norm2.sqrt();
         let bound = T::lit(self.dim as f64).sqrt() + self.cfg.huber;
         let clipped = if norm > bound && norm.finite() {
             r * (bound / norm)
         } else {
             *r
         };
-        self.push(&clipped, r, phi);
+        self.push(&clipped, &raw_r, phi, gain, level);
         let means = self.window_means();
         let mut best_ratio = T::zero();
         let mut isolate: Option<(usize, T)> = None;
@@ -462,7 +425,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             .zip(self.scale_h.iter())
             .enumerate()
         {
-            let Some((rbar, phibar)) = m else {
+            let Some((rbar, phibar, gbar)) = m else {
                 continue;
             };
             let total = cov + self.block_cov * Self::prediction_weight(Some(&cal), phibar);
@@ -484,7 +447,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                     ratio,
                     scale: i,
                     suspect: Some(k),
-                    bias,
+                    // Back to sensor units: a bias b shows as b × mean gain.
+                    bias: bias / gbar.max(T::lit(1e-6)),
                     margin,
                     isolate: None,
                     learning: false,
@@ -534,8 +498,11 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             let w = T::one() / T::lit(f64::from(self.updates)).min(self.cfg.variance_blocks);
             let d = clipped * clipped.transpose();
             self.block_cov = pad(&(self.block_cov * (T::one() - w) + d * w), self.dim);
+            // The block's raw energy in block-covariance units.
+            let dimf = T::lit(self.dim.max(1) as f64);
+            self.scale.learn(level, energy * norm2 / dimf, w);
             for (cov, m) in self.window_cov.iter_mut().zip(means.iter()) {
-                if let Some((rbar, _)) = m {
+                if let Some((rbar, _, _)) = m {
                     *cov = pad(
                         &(*cov * (T::one() - w) + rbar * rbar.transpose() * w),
                         self.dim,
