@@ -52,11 +52,13 @@ use crate::stats::student_t_upper_quantile;
 
 mod config;
 mod glr;
+mod quantile;
 mod scale;
 mod training;
 
 pub use config::MultiscaleConfig;
 use glr::{best_two, mahalanobis2, pad};
+use quantile::student_t_cornish_fisher;
 use scale::VibrationScale;
 
 /// Sensors whose own vibration energy is a regressor (the first nine).
@@ -136,13 +138,15 @@ pub struct Multiscale<T: Real, const N: usize, const W: usize> {
     filled: usize,
     /// Blocks since a score was last at or above the learning fraction.
     quiet_blocks: u32,
-    /// The threshold of each window length (see
-    /// [`thresholds`](Self::thresholds)). The degrees of freedom are the
-    /// steady-state ones from the start: counting only the training's few
-    /// windows would switch the long windows off for the first minutes
-    /// (tried: it halved the detections on log171); the conservative start
-    /// of the long windows' covariances covers that period instead.
+    /// The steady-state threshold of each window length (see
+    /// [`thresholds`](Self::thresholds)).
     scale_h: [T; SCALES],
+    /// Normal quantile at `false_alarm / 2`, for the thresholds of the
+    /// first minutes (see [`early_threshold`](Self::early_threshold)); 0
+    /// when it could not be computed (steady thresholds throughout).
+    z: T,
+    /// Residual blocks the training covariance rests on.
+    trained_blocks: u32,
 }
 
 impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
@@ -189,6 +193,10 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             filled: 0,
             quiet_blocks: 0,
             scale_h: thresholds,
+            z: crate::stats::normal_upper_quantile(cfg.false_alarm * 0.5)
+                .map(T::lit)
+                .unwrap_or(T::zero()),
+            trained_blocks: 0,
         }
     }
 
@@ -419,15 +427,16 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         let means = self.window_means();
         let mut best_ratio = T::zero();
         let mut isolate: Option<(usize, T)> = None;
-        for (i, ((m, cov), h)) in means
+        for (i, ((m, cov), (h_steady, len))) in means
             .iter()
             .zip(self.window_cov.iter())
-            .zip(self.scale_h.iter())
+            .zip(self.scale_h.iter().zip(self.cfg.scales.iter()))
             .enumerate()
         {
             let Some((rbar, phibar, gbar)) = m else {
                 continue;
             };
+            let h = &self.early_threshold(*h_steady, *len);
             let total = cov + self.block_cov * Self::prediction_weight(Some(&cal), phibar);
             let Ok(l) = cholesky(&pad(&total, self.dim)) else {
                 continue;
@@ -511,6 +520,29 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             }
         }
         Some(out)
+    }
+
+    /// The threshold of a window of `len` blocks now: the squared t
+    /// quantile with the degrees of freedom its covariance has so far — at
+    /// most those of the training's block covariance it started from
+    /// (`trained_blocks − 1`), plus one per `len` blocks learned since —
+    /// capped at the steady state. Right after training the shortest
+    /// window's threshold is about a quarter higher than in steady state
+    /// (ν 39 instead of 96 for 10-block windows of a 30-s training); the
+    /// longer windows, whose steady ν is lower, start at theirs (their
+    /// covariances start conservatively at the shortest window's instead).
+    /// The quantile is the Cornish–Fisher expansion of t in powers of 1/ν
+    /// (Abramowitz & Stegun 26.7.5; within 0.5 % for ν ≥ 12), a few flops
+    /// per block instead of a root search.
+    fn early_threshold(&self, steady: T, len: u16) -> T {
+        if self.z <= T::zero() {
+            return steady;
+        }
+        let learned = self.updates.saturating_sub(self.trained_blocks);
+        let nu = T::lit(f64::from(self.trained_blocks.saturating_sub(1)))
+            + T::lit(f64::from(learned)) / T::lit(f64::from(len.max(1)));
+        let t = student_t_cornish_fisher(self.z, nu.max(T::lit(8.0)));
+        (t * t).max(steady)
     }
 
     /// Forgets the window (after a reconfiguration) and re-arms the quiet

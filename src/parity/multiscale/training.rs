@@ -84,6 +84,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         // each quiet block in flight then adds one, up to the fixed memory
         // `variance_blocks`; the thresholds follow the degrees of freedom.
         self.updates = n as u32;
+        self.trained_blocks = n as u32;
         let _ = train_blocks;
         Some(())
     }
