@@ -145,9 +145,6 @@ pub struct FifoStatus {
     /// Packets with the "no data" value, an empty marker or a malformed
     /// header.
     pub invalid_packets: u16,
-    /// Packets left in the FIFO because the read buffer was full (read
-    /// next time; the driver's buffer should hold ≥ 2 periods).
-    pub left_in_fifo: u16,
     /// A malformed header made the driver flush the FIFO.
     pub resynchronised: bool,
 }
@@ -167,10 +164,10 @@ pub struct FifoTotals {
 }
 
 /// The ICM-42688-P read through its FIFO at full ODR, integrated over the
-/// monitor period. `N` packets are read per call at most (16 bytes each,
-/// held in the driver); make it at least twice the watermark.
+/// monitor period. The FIFO is read in bursts of up to `N` packets (16
+/// bytes each, held in the driver), as many as it takes to empty it.
 #[derive(Debug)]
-pub struct Icm42688Fifo<SPI, const N: usize = 64> {
+pub struct Icm42688Fifo<SPI, const N: usize = 32> {
     dev: Icm42688<SPI>,
     buf: [[u8; PACKET_LEN]; N],
     integrator: DeltaIntegrator,
@@ -260,6 +257,16 @@ impl<SPI: SpiDevice, const N: usize> Icm42688Fifo<SPI, N> {
         self.dev
     }
 
+    /// Moves the driver's time to the packet stamped `ts`: returns the ODR
+    /// periods since the previous packet (≥ 1) and counts the missing ones.
+    fn advance(&mut self, ts: u16, st: &mut FifoStatus) -> u32 {
+        let k = self.periods_since(ts);
+        st.packets_lost = st.packets_lost.saturating_add(k - 1);
+        self.last_timestamp = Some(ts);
+        self.time_us = self.time_us.wrapping_add(k.saturating_mul(self.period_us));
+        k
+    }
+
     /// ODR periods from the previous time stamp to `ts` (≥ 1).
     fn periods_since(&self, ts: u16) -> u32 {
         let Some(prev) = self.last_timestamp else {
@@ -282,12 +289,17 @@ impl<SPI: SpiDevice, const N: usize> Icm42688Fifo<SPI, N> {
         st.count = count;
         st.overflowed = flags & int_status::FIFO_FULL != 0 || usize::from(count) >= FIFO_PACKETS;
         st.watermark_reached = flags & int_status::FIFO_THS != 0;
-        let n = usize::from(count).min(N);
-        st.left_in_fifo = count.saturating_sub(n as u16);
-        let Some(packets) = self.buf.get_mut(..n) else {
-            return Ok(st);
-        };
-        if n > 0 {
+        let (alsb, glsb) = (self.dev.accel_lsb(), self.dev.gyro_lsb());
+        let mut malformed = false;
+        // Everything the count says is there, in bursts of up to N packets
+        // (so a stall that filled the FIFO is drained in one call).
+        let mut remaining = usize::from(count).min(FIFO_PACKETS);
+        while remaining > 0 && !malformed {
+            let n = remaining.min(N);
+            remaining -= n;
+            let Some(packets) = self.buf.get_mut(..n) else {
+                break;
+            };
             if let Err(e) = self
                 .dev
                 .read_registers(reg::FIFO_DATA, packets.as_flattened_mut())
@@ -295,40 +307,31 @@ impl<SPI: SpiDevice, const N: usize> Icm42688Fifo<SPI, N> {
                 self.pending_flags = flags;
                 return Err(e);
             }
-        }
-        let (alsb, glsb) = (self.dev.accel_lsb(), self.dev.gyro_lsb());
-        let mut malformed = false;
-        for i in 0..n {
-            let Some(p) = self.buf.get(i) else { break };
-            st.packets_read = st.packets_read.saturating_add(1);
-            match parse_packet(p) {
-                Packet::Sample(raw) => {
-                    let k = self.periods_since(raw.timestamp);
-                    st.packets_lost = st.packets_lost.saturating_add(k - 1);
-                    self.last_timestamp = Some(raw.timestamp);
-                    self.time_us = self.time_us.wrapping_add(k.saturating_mul(self.period_us));
-                    let h = k.saturating_mul(self.period_us) as f32 * 1e-6;
-                    let g = raw.gyro.map(|c| f32::from(c) * glsb);
-                    let a = raw.accel.map(|c| f32::from(c) * alsb);
-                    if self.integrator.push(g, a, h) {
-                        st.samples = st.samples.saturating_add(1);
+            for i in 0..n {
+                let Some(p) = self.buf.get(i) else { break };
+                st.packets_read = st.packets_read.saturating_add(1);
+                match parse_packet(p) {
+                    Packet::Sample(raw) => {
+                        let k = self.advance(raw.timestamp, &mut st);
+                        let h = k.saturating_mul(self.period_us) as f32 * 1e-6;
+                        let g = raw.gyro.map(|c| f32::from(c) * glsb);
+                        let a = raw.accel.map(|c| f32::from(c) * alsb);
+                        if self.integrator.push(g, a, h) {
+                            st.samples = st.samples.saturating_add(1);
+                        }
+                        self.temperature = f32::from(raw.temperature) / 2.07 + 25.0;
                     }
-                    self.temperature = f32::from(raw.temperature) / 2.07 + 25.0;
-                }
-                Packet::NoData { timestamp } => {
-                    let k = self.periods_since(timestamp);
-                    st.packets_lost = st.packets_lost.saturating_add(k - 1);
-                    self.last_timestamp = Some(timestamp);
-                    self.time_us = self.time_us.wrapping_add(k.saturating_mul(self.period_us));
-                    st.invalid_packets = st.invalid_packets.saturating_add(1);
-                }
-                Packet::Empty => {
-                    st.invalid_packets = st.invalid_packets.saturating_add(1);
-                }
-                Packet::Malformed(_) => {
-                    st.invalid_packets = st.invalid_packets.saturating_add(1);
-                    malformed = true;
-                    break;
+                    Packet::NoData { timestamp } => {
+                        self.advance(timestamp, &mut st);
+                        st.invalid_packets = st.invalid_packets.saturating_add(1);
+                    }
+                    // An empty marker inside the counted packets, or a header
+                    // that is not packet 3: the stream lost its alignment.
+                    Packet::Empty | Packet::Malformed(_) => {
+                        st.invalid_packets = st.invalid_packets.saturating_add(1);
+                        malformed = true;
+                        break;
+                    }
                 }
             }
         }
@@ -337,7 +340,6 @@ impl<SPI: SpiDevice, const N: usize> Icm42688Fifo<SPI, N> {
             self.dev
                 .write_register(reg::SIGNAL_PATH_RESET, FIFO_FLUSH)?;
             st.resynchronised = true;
-            st.left_in_fifo = 0;
             self.last_timestamp = None;
         }
         Ok(st)
