@@ -150,3 +150,60 @@ fn bus_errors_are_typed_and_recoverable() {
     drop(dev.destroy());
     spi.done();
 }
+
+/// The FIFO path, byte for byte: configuration (DS-000347 register values)
+/// and one read of two packet-3 records.
+#[test]
+fn fifo_configuration_and_read_are_the_documented_bytes() {
+    use imu_fdi::imu::fifo::Icm42688Fifo;
+    let mut t = init_sequence();
+    t.extend(write_reg(reg::INTF_CONFIG0, 0x73)); // records, big endian, SPI
+    t.extend(read_reg(reg::TMST_CONFIG, 0x23)); // reset value
+    t.extend(write_reg(reg::TMST_CONFIG, 0x2B)); // + TMST_RES 16 µs, no delta
+    t.extend(write_reg(reg::FIFO_CONFIG1, 0x2F)); // packet 3, WM ≥ threshold
+    t.extend(write_reg(reg::FIFO_CONFIG2, 20));
+    t.extend(write_reg(reg::FIFO_CONFIG3, 0));
+    t.extend(write_reg(reg::FIFO_CONFIG, 0xC0)); // stop-on-full
+    t.extend(write_reg(reg::SIGNAL_PATH_RESET, 0x02)); // flush
+                                                       // INT_STATUS (FIFO_THS), FIFO_COUNT = 2 records.
+    t.extend(vec![
+        T::transaction_start(),
+        T::write(reg::INT_STATUS | 0x80),
+        T::read_vec(vec![0x04, 0x00, 0x02]),
+        T::transaction_end(),
+    ]);
+    let packet = |ax: i16, gz: i16, temp: i8, ts: u16| -> Vec<u8> {
+        let mut p = vec![0x68];
+        for w in [ax, 0, -2048, 0, 0, gz] {
+            p.extend(w.to_be_bytes());
+        }
+        p.push(temp as u8);
+        p.extend(ts.to_be_bytes());
+        p
+    };
+    let mut data = packet(100, 1640, 10, 1000);
+    data.extend(packet(300, 1640, 10, 1062)); // 62 × 16 µs later: the next sample
+    t.extend(vec![
+        T::transaction_start(),
+        T::write(reg::FIFO_DATA | 0x80),
+        T::read_vec(data),
+        T::transaction_end(),
+    ]);
+    let mut spi = Mock::new(&t);
+    let dev = Icm42688::new(spi.clone(), Config::default(), &mut NoopDelay::new()).unwrap();
+    let mut fifo: Icm42688Fifo<_> = Icm42688Fifo::new(dev, 20).unwrap();
+    let s = fifo.read().unwrap();
+    let st = *fifo.fifo_status();
+    assert_eq!((st.count, st.samples, st.packets_lost), (2, 2, 0));
+    assert!(st.watermark_reached && !st.overflowed);
+    // The mean of the two samples: ax (100 + 300)/2 LSB at ±16 g.
+    let alsb = 16.0 * 9.80665 / 32768.0;
+    assert!((s.accel[0] - 200.0 * alsb).abs() < 1e-5, "{}", s.accel[0]);
+    assert!((s.accel[2] + 9.80665).abs() < 1e-4);
+    // 1640 LSB at ±2000 °/s = 100.1 °/s.
+    assert!((s.gyro[2].to_degrees() - 1640.0 * 2000.0 / 32768.0).abs() < 1e-3);
+    assert!((s.temperature - (10.0 / 2.07 + 25.0)).abs() < 1e-4);
+    assert_eq!(s.timestamp_us, Some(2_000));
+    drop(fifo.destroy().destroy());
+    spi.done();
+}

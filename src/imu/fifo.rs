@@ -295,7 +295,7 @@ impl<SPI: SpiDevice, const N: usize> Icm42688Fifo<SPI, N> {
         // (so a stall that filled the FIFO is drained in one call).
         let mut remaining = usize::from(count).min(FIFO_PACKETS);
         while remaining > 0 && !malformed {
-            let n = remaining.min(N);
+            let n = remaining.min(N.max(1));
             remaining -= n;
             let Some(packets) = self.buf.get_mut(..n) else {
                 break;
