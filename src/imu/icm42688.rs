@@ -144,6 +144,10 @@ impl AccelRange {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Odr {
+    /// 4 kHz (the FIFO holds 32 ms of packet 3).
+    Hz4000 = 0b0100,
+    /// 2 kHz (the FIFO holds 64 ms of packet 3).
+    Hz2000 = 0b0101,
     /// 1 kHz.
     Hz1000 = 0b0110,
     /// 500 Hz.
@@ -160,6 +164,8 @@ impl Odr {
     /// Sample period, µs (an integer for every rate offered).
     pub fn period_us(self) -> u32 {
         match self {
+            Self::Hz4000 => 250,
+            Self::Hz2000 => 500,
             Self::Hz1000 => 1_000,
             Self::Hz500 => 2_000,
             Self::Hz200 => 5_000,
