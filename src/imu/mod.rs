@@ -45,6 +45,8 @@ impl ImuSample {
 pub trait Imu {
     /// Why a read failed.
     type Error;
-    /// Reads the latest sample (one bus transaction, never torn).
+    /// Reads the next sample: the latest one (register drivers: one bus
+    /// transaction, never torn) or the average over the samples since the
+    /// previous read (FIFO drivers, e.g. [`Icm42688Fifo`]).
     fn read(&mut self) -> Result<ImuSample, Self::Error>;
 }
