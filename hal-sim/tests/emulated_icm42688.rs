@@ -309,3 +309,64 @@ fn no_data_packets_and_a_misaligned_stream_are_reported() {
     assert_eq!(dev.fifo_status().samples, 5);
     assert_eq!(dev.fifo_totals().resyncs, 1);
 }
+
+/// S2 (AUV, 100 Hz) through the FIFO path: each simulated sample is held
+/// for the 10 samples a 1 kHz chip produces in the period, the FIFO driver
+/// integrates them back into the period's average, the monitor steps on it
+/// with the chip's time stamps for `dt`. Detections match the direct path
+/// (the average of 10 equal quantised samples is that sample up to f32
+/// rounding).
+#[test]
+fn s2_through_the_fifo_path_matches_the_direct_path() {
+    let scn = Scenario::s2();
+    let cfg = monitor_config::<f32>(&scn, &RunOptions::default());
+    let chip = RefCell::new(EmulatedIcm42688::new());
+    let dev = Icm42688::new(
+        SharedBus(&chip),
+        Config {
+            odr: Odr::Hz1000,
+            ..auv_config()
+        },
+        &mut NoopDelay::new(),
+    )
+    .unwrap();
+    let mut fifo: Icm42688Fifo<_> = Icm42688Fifo::new(dev, 10).unwrap();
+    let mut via_fifo = UkfMonitor::<f32>::new(cfg).unwrap();
+    let mut direct = UkfMonitor::<f32>::new(cfg).unwrap();
+    let (mut tally_fifo, mut tally_direct) = (DetectionTally::new(&scn), DetectionTally::new(&scn));
+    let mut last_ts = None;
+    for s in Simulator::new(&scn, 1) {
+        let imu = s.imu.unwrap();
+        let z = MeasVec::from_fn(|i, _| s.aiding[i] as f32);
+        let m = Measurement {
+            z,
+            available: s.aiding_available,
+        };
+        for _ in 0..10 {
+            chip.borrow_mut()
+                .sample_odr([imu[0], imu[1], imu[2]], [imu[3], imu[4], imu[5]], 25.0);
+        }
+        let sample = fifo.read().unwrap();
+        assert_eq!(fifo.fifo_status().samples, 10);
+        let ts = sample.timestamp_us.unwrap();
+        let dt = last_ts.map_or(s.dt as f32, |p: u32| ts.wrapping_sub(p) as f32 * 1e-6);
+        last_ts = Some(ts);
+        assert!((f64::from(dt) - s.dt).abs() < 1e-6, "{dt} vs {}", s.dt);
+        let r = via_fifo.step(&ImuVec::from(sample.channels()), dt, &m);
+        tally_fifo.record(&s, &r);
+        let r = direct.step(&ImuVec::from_fn(|i, _| imu[i] as f32), s.dt as f32, &m);
+        tally_direct.record(&s, &r);
+    }
+    assert!(tally_fifo.all_detected());
+    assert_eq!(tally_fifo.counts(), tally_direct.counts());
+    for (x, y) in tally_fifo
+        .first_detections()
+        .iter()
+        .zip(tally_direct.first_detections().iter())
+    {
+        assert!(
+            (x.unwrap() - y.unwrap()).abs() <= 0.2 + 1e-9,
+            "{x:?} vs {y:?}"
+        );
+    }
+}
