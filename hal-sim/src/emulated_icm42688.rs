@@ -8,9 +8,27 @@
 //! units into big-endian counts at the configured full scale, with rounding
 //! and saturation. Bus failures can be injected. `no_std`, so the same
 //! emulated chip runs on the host and inside the QEMU firmware.
+//!
+//! The FIFO (DS-000347 §6) is emulated for packet 3 (header 0x68,
+//! accelerometer, gyro, 8-bit temperature, 16-bit ODR time stamp; 16 bytes)
+//! in a 2 KB buffer: [`EmulatedIcm42688::sample_odr`] presents one sample
+//! at the output data rate and, unless `FIFO_CONFIG` is in bypass, appends
+//! its packet. Stream-to-FIFO mode drops the oldest packet when full,
+//! stop-on-full drops the new one; both set `FIFO_FULL_INT`, and the
+//! dropped packets are counted ([`EmulatedIcm42688::fifo_dropped`], the
+//! ground truth a driver's loss count is checked against). `FIFO_COUNT`
+//! counts bytes or records (`INTF_CONFIG0.FIFO_COUNT_REC`) in either byte
+//! order, `FIFO_THS_INT` follows the watermark (`FIFO_CONFIG2/3`),
+//! `INT_STATUS` clears on read, `FIFO_DATA` pops a byte per read without
+//! advancing the address (0xFF when empty), `SIGNAL_PATH_RESET.FIFO_FLUSH`
+//! empties it. Time stamps count the chip's own ODR ticks at 1 µs or 16 µs
+//! (`TMST_CONFIG.TMST_RES`). Not emulated: packets 1, 2 and 4 (other
+//! `FIFO_CONFIG1` contents put nothing in the FIFO), little-endian sensor
+//! data, partial-read resume.
 
 use embedded_hal::spi::{ErrorKind, ErrorType, Operation, SpiDevice};
 
+use imu_fdi::imu::fifo::{header, int_status, FIFO_BYTES, PACKET_LEN};
 use imu_fdi::imu::icm42688::{reg, DEVICE_ID, NO_DATA};
 
 const REGS: usize = 128;
@@ -34,6 +52,13 @@ pub struct EmulatedIcm42688 {
     fail_next: u32,
     transactions: u32,
     sample: Option<([f64; 3], [f64; 3], f64)>,
+    fifo: [u8; FIFO_BYTES],
+    fifo_head: usize,
+    fifo_len: usize,
+    fifo_dropped: u64,
+    odr_ticks: u64,
+    int_flags: u8,
+    count_latch: u16,
 }
 
 impl Default for EmulatedIcm42688 {
@@ -50,6 +75,13 @@ impl EmulatedIcm42688 {
             fail_next: 0,
             transactions: 0,
             sample: None,
+            fifo: [0; FIFO_BYTES],
+            fifo_head: 0,
+            fifo_len: 0,
+            fifo_dropped: 0,
+            odr_ticks: 0,
+            int_flags: 0,
+            count_latch: 0,
         };
         c.reset();
         c
@@ -58,10 +90,15 @@ impl EmulatedIcm42688 {
     fn reset(&mut self) {
         self.regs = [0; REGS];
         self.set(reg::WHO_AM_I, DEVICE_ID);
-        // Reset values: ±2000 °/s, ±16 g, 1 kHz; sensors off.
+        // Reset values: ±2000 °/s, ±16 g, 1 kHz; sensors off; FIFO in
+        // bypass; big-endian count and data; time stamps on at 1 µs.
         self.set(reg::GYRO_CONFIG0, 0x06);
         self.set(reg::ACCEL_CONFIG0, 0x06);
         self.set(reg::GYRO_ACCEL_CONFIG0, 0x11);
+        self.set(reg::INTF_CONFIG0, 0x30);
+        self.set(reg::TMST_CONFIG, 0x23);
+        self.flush_fifo();
+        self.int_flags = 0;
         self.refresh();
     }
 
@@ -82,6 +119,161 @@ impl EmulatedIcm42688 {
     pub fn set_sample(&mut self, accel_mps2: [f64; 3], gyro_rads: [f64; 3], temperature_c: f64) {
         self.sample = Some((accel_mps2, gyro_rads, temperature_c));
         self.refresh();
+    }
+
+    /// One sample at the output data rate: presents it in the data
+    /// registers (as [`set_sample`](Self::set_sample)), advances the chip's
+    /// time stamp by one ODR period, raises `DATA_RDY_INT` and, unless the
+    /// FIFO is in bypass, appends its packet 3.
+    pub fn sample_odr(&mut self, accel_mps2: [f64; 3], gyro_rads: [f64; 3], temperature_c: f64) {
+        self.sample = Some((accel_mps2, gyro_rads, temperature_c));
+        self.refresh();
+        self.odr_ticks = self.odr_ticks.wrapping_add(1);
+        self.int_flags |= int_status::DATA_RDY;
+        self.push_packet();
+    }
+
+    /// Packets (or their oldest bytes, in stream mode) the FIFO dropped
+    /// because it was full, since power-on.
+    pub fn fifo_dropped(&self) -> u64 {
+        self.fifo_dropped
+    }
+
+    /// Bytes in the FIFO.
+    pub fn fifo_bytes(&self) -> usize {
+        self.fifo_len
+    }
+
+    /// ODR period of the gyro's `GYRO_ODR` code, µs (0 for a code this
+    /// emulator does not know).
+    fn odr_period_us(&self) -> f64 {
+        match self.get(reg::GYRO_CONFIG0) & 0x0F {
+            0b0001 => 1e6 / 32_000.0,
+            0b0010 => 1e6 / 16_000.0,
+            0b0011 => 125.0,
+            0b0100 => 250.0,
+            0b0101 => 500.0,
+            0b0110 => 1_000.0,
+            0b0111 => 5_000.0,
+            0b1000 => 10_000.0,
+            0b1001 => 20_000.0,
+            0b1111 => 2_000.0,
+            _ => 0.0,
+        }
+    }
+
+    fn flush_fifo(&mut self) {
+        self.fifo_head = 0;
+        self.fifo_len = 0;
+    }
+
+    fn fifo_push_byte(&mut self, b: u8) {
+        let i = (self.fifo_head + self.fifo_len) % FIFO_BYTES;
+        if let Some(x) = self.fifo.get_mut(i) {
+            *x = b;
+        }
+        self.fifo_len += 1;
+    }
+
+    fn fifo_pop_byte(&mut self) -> u8 {
+        if self.fifo_len == 0 {
+            return 0xFF;
+        }
+        let b = self.fifo.get(self.fifo_head).copied().unwrap_or(0xFF);
+        self.fifo_head = (self.fifo_head + 1) % FIFO_BYTES;
+        self.fifo_len -= 1;
+        b
+    }
+
+    /// The FIFO count as the chip reports it: records or bytes.
+    fn fifo_count(&self) -> u16 {
+        let records = self.get(reg::INTF_CONFIG0) & 0x40 != 0;
+        let n = if records {
+            self.fifo_len / PACKET_LEN
+        } else {
+            self.fifo_len
+        };
+        n as u16
+    }
+
+    fn push_packet(&mut self) {
+        let mode = self.get(reg::FIFO_CONFIG) >> 6;
+        // Packet 3 only: accel, gyro, temperature and time stamp enabled.
+        if mode == 0 || self.get(reg::FIFO_CONFIG1) & 0x0F != 0x0F {
+            return;
+        }
+        if self.fifo_len + PACKET_LEN > FIFO_BYTES {
+            self.int_flags |= int_status::FIFO_FULL;
+            self.fifo_dropped += 1;
+            if mode == 0b01 {
+                // Stream-to-FIFO: the oldest packet makes room.
+                for _ in 0..PACKET_LEN {
+                    self.fifo_pop_byte();
+                }
+            } else {
+                // Stop-on-full: the new sample is lost.
+                return;
+            }
+        }
+        let res_us = if self.get(reg::TMST_CONFIG) & 0x08 != 0 {
+            16.0
+        } else {
+            1.0
+        };
+        let t_us = self.odr_ticks as f64 * self.odr_period_us();
+        let ts = (libm::floor(t_us / res_us) as u64 & 0xFFFF) as u16;
+        let data = |chip: &Self, addr: u8| -> [u8; 2] { [chip.get(addr), chip.get(addr + 1)] };
+        let mut p = [0u8; PACKET_LEN];
+        p[0] = header::PACKET3;
+        for i in 0..6u8 {
+            let [hi, lo] = data(self, reg::TEMP_DATA1 + 2 + 2 * i);
+            p[1 + 2 * usize::from(i)] = hi;
+            p[2 + 2 * usize::from(i)] = lo;
+        }
+        // FIFO temperature: 8 bit, T = t / 2.07 + 25 °C.
+        let temp = self.sample.map_or(25.0, |s| s.2);
+        p[13] = (libm::round((temp - 25.0) * 2.07).clamp(-128.0, 127.0) as i8) as u8;
+        let [t1, t0] = ts.to_be_bytes();
+        p[14] = t1;
+        p[15] = t0;
+        for b in p {
+            self.fifo_push_byte(b);
+        }
+        if self.fifo_len + PACKET_LEN > FIFO_BYTES {
+            self.int_flags |= int_status::FIFO_FULL;
+        }
+        let wm = u16::from(self.get(reg::FIFO_CONFIG2))
+            | (u16::from(self.get(reg::FIFO_CONFIG3) & 0x0F) << 8);
+        if wm > 0 && self.fifo_count() >= wm {
+            self.int_flags |= int_status::FIFO_THS;
+        }
+    }
+
+    /// A register read with the chip's side effects.
+    fn read_byte(&mut self, addr: u8) -> u8 {
+        let big = self.get(reg::INTF_CONFIG0) & 0x20 != 0;
+        match addr {
+            reg::INT_STATUS => core::mem::take(&mut self.int_flags),
+            reg::FIFO_COUNTH => {
+                self.count_latch = self.fifo_count();
+                let [hi, lo] = self.count_latch.to_be_bytes();
+                if big {
+                    hi
+                } else {
+                    lo
+                }
+            }
+            reg::FIFO_COUNTL => {
+                let [hi, lo] = self.count_latch.to_be_bytes();
+                if big {
+                    lo
+                } else {
+                    hi
+                }
+            }
+            reg::FIFO_DATA => self.fifo_pop_byte(),
+            a => self.get(a),
+        }
     }
 
     /// Makes the next `n` transactions fail.
@@ -145,6 +337,20 @@ impl EmulatedIcm42688 {
         match addr {
             reg::WHO_AM_I => {} // read-only
             reg::DEVICE_CONFIG if v & 1 != 0 => self.reset(),
+            reg::SIGNAL_PATH_RESET => {
+                // FIFO_FLUSH (bit 1) empties the FIFO; the bit self-clears.
+                if v & 0x02 != 0 {
+                    self.flush_fifo();
+                }
+                self.set(addr, v & !0x02);
+            }
+            reg::FIFO_CONFIG => {
+                if v >> 6 == 0 {
+                    // Bypass: the FIFO is not in use.
+                    self.flush_fifo();
+                }
+                self.set(addr, v);
+            }
             _ => {
                 self.set(addr, v);
                 self.refresh();
@@ -176,11 +382,14 @@ impl SpiDevice for EmulatedIcm42688 {
                         0
                     }
                     Some(a) => {
-                        let out = if *reading { chip.get(*a) } else { 0 };
+                        let out = if *reading { chip.read_byte(*a) } else { 0 };
                         if !*reading {
                             chip.write_register(*a, byte_in);
                         }
-                        *a = a.wrapping_add(1) & 0x7F;
+                        // Reads of FIFO_DATA keep popping the FIFO.
+                        if !(*reading && *a == reg::FIFO_DATA) {
+                            *a = a.wrapping_add(1) & 0x7F;
+                        }
                         out
                     }
                 }

@@ -16,8 +16,24 @@ use super::{Imu, ImuSample};
 pub mod reg {
     /// Soft reset (bit 0).
     pub const DEVICE_CONFIG: u8 = 0x11;
+    /// FIFO mode (bits 7:6: 00 bypass, 01 stream-to-FIFO, 1x stop-on-full).
+    pub const FIFO_CONFIG: u8 = 0x16;
     /// First data register: temperature high byte; 14 bytes to `GYRO_DATA_Z0`.
     pub const TEMP_DATA1: u8 = 0x1D;
+    /// Interrupt status (clear on read): `FIFO_THS_INT` bit 2,
+    /// `FIFO_FULL_INT` bit 1, `DATA_RDY_INT` bit 3.
+    pub const INT_STATUS: u8 = 0x2D;
+    /// FIFO count, high byte (the low byte follows at 0x2F).
+    pub const FIFO_COUNTH: u8 = 0x2E;
+    /// FIFO count, low byte.
+    pub const FIFO_COUNTL: u8 = 0x2F;
+    /// FIFO read port (the address does not auto-increment on it).
+    pub const FIFO_DATA: u8 = 0x30;
+    /// `FIFO_FLUSH` (bit 1).
+    pub const SIGNAL_PATH_RESET: u8 = 0x4B;
+    /// Interface: `FIFO_COUNT_REC` (bit 6), `FIFO_COUNT_ENDIAN` (bit 5),
+    /// `SENSOR_DATA_ENDIAN` (bit 4), `UI_SIFS_CFG` (bits 1:0).
+    pub const INTF_CONFIG0: u8 = 0x4C;
     /// Power management: gyro and accelerometer modes.
     pub const PWR_MGMT0: u8 = 0x4E;
     /// Gyro full scale (bits 7:5) and output data rate (bits 3:0).
@@ -26,6 +42,16 @@ pub mod reg {
     pub const ACCEL_CONFIG0: u8 = 0x50;
     /// UI filter bandwidths: accelerometer (7:4), gyro (3:0).
     pub const GYRO_ACCEL_CONFIG0: u8 = 0x52;
+    /// Time stamp: `TMST_RES` (bit 3, 16 µs), `TMST_EN` (bit 0).
+    pub const TMST_CONFIG: u8 = 0x54;
+    /// FIFO contents: `FIFO_WM_GT_TH` (5), `FIFO_HIRES_EN` (4),
+    /// `FIFO_TMST_FSYNC_EN` (3), `FIFO_TEMP_EN` (2), `FIFO_GYRO_EN` (1),
+    /// `FIFO_ACCEL_EN` (0).
+    pub const FIFO_CONFIG1: u8 = 0x5F;
+    /// FIFO watermark, bits 7:0.
+    pub const FIFO_CONFIG2: u8 = 0x60;
+    /// FIFO watermark, bits 11:8 (in bits 3:0).
+    pub const FIFO_CONFIG3: u8 = 0x61;
     /// Identity register.
     pub const WHO_AM_I: u8 = 0x75;
     /// Register bank select.
@@ -118,6 +144,10 @@ impl AccelRange {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Odr {
+    /// 4 kHz (the FIFO holds 32 ms of packet 3).
+    Hz4000 = 0b0100,
+    /// 2 kHz (the FIFO holds 64 ms of packet 3).
+    Hz2000 = 0b0101,
     /// 1 kHz.
     Hz1000 = 0b0110,
     /// 500 Hz.
@@ -128,6 +158,21 @@ pub enum Odr {
     Hz100 = 0b1000,
     /// 50 Hz.
     Hz50 = 0b1001,
+}
+
+impl Odr {
+    /// Sample period, µs (an integer for every rate offered).
+    pub fn period_us(self) -> u32 {
+        match self {
+            Self::Hz4000 => 250,
+            Self::Hz2000 => 500,
+            Self::Hz1000 => 1_000,
+            Self::Hz500 => 2_000,
+            Self::Hz200 => 5_000,
+            Self::Hz100 => 10_000,
+            Self::Hz50 => 20_000,
+        }
+    }
 }
 
 /// Sensor configuration.
@@ -218,6 +263,24 @@ impl<SPI: SpiDevice> Icm42688<SPI> {
         Ok(())
     }
 
+    /// Accelerometer LSB at the configured full scale, m/s².
+    pub fn accel_lsb(&self) -> f32 {
+        self.config.accel_range.full_scale_g() * STANDARD_GRAVITY / 32768.0
+    }
+
+    /// Gyro LSB at the configured full scale, rad/s.
+    pub fn gyro_lsb(&self) -> f32 {
+        self.config.gyro_range.full_scale_dps().to_radians() / 32768.0
+    }
+
+    /// Reads `buf.len()` bytes starting at `addr` in one transaction
+    /// (registers auto-increment; on `FIFO_DATA` every byte pops the FIFO).
+    pub fn read_registers(&mut self, addr: u8, buf: &mut [u8]) -> Result<(), Error<SPI::Error>> {
+        self.spi
+            .transaction(&mut [Operation::Write(&[addr | READ]), Operation::Read(buf)])?;
+        Ok(())
+    }
+
     /// Releases the bus.
     pub fn destroy(self) -> SPI {
         self.spi
@@ -239,8 +302,8 @@ impl<SPI: SpiDevice> Icm42688<SPI> {
         if words.iter().skip(1).any(|w| *w == NO_DATA) {
             return Err(Error::NoData);
         }
-        let accel_lsb = self.config.accel_range.full_scale_g() * STANDARD_GRAVITY / 32768.0;
-        let gyro_lsb = self.config.gyro_range.full_scale_dps().to_radians() / 32768.0;
+        let accel_lsb = self.accel_lsb();
+        let gyro_lsb = self.gyro_lsb();
         let [t, ax, ay, az, gx, gy, gz] = words;
         Ok(ImuSample {
             accel: [

@@ -1,9 +1,16 @@
 //! IMU drivers: the [`Imu`] trait the monitor is fed through, and a real
-//! driver for the TDK InvenSense ICM-42688-P over `embedded_hal::spi::SpiDevice`.
+//! driver for the TDK InvenSense ICM-42688-P over `embedded_hal::spi::SpiDevice`:
+//! register reads ([`Icm42688`], the latest sample) or the FIFO at full
+//! ODR integrated into the monitor period ([`Icm42688Fifo`], delta angle /
+//! delta velocity with coning and sculling corrections: [`integrate`]).
 
+pub mod fifo;
 pub mod icm42688;
+pub mod integrate;
 
+pub use fifo::{FifoStatus, FifoTotals, Icm42688Fifo};
 pub use icm42688::{AccelRange, Config, Error as Icm42688Error, GyroRange, Icm42688, Odr};
+pub use integrate::{Delta, DeltaIntegrator};
 
 /// One IMU sample in SI units, in the sensor's axes.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -38,6 +45,8 @@ impl ImuSample {
 pub trait Imu {
     /// Why a read failed.
     type Error;
-    /// Reads the latest sample (one bus transaction, never torn).
+    /// Reads the next sample: the latest one (register drivers: one bus
+    /// transaction, never torn) or the average over the samples since the
+    /// previous read (FIFO drivers, e.g. [`Icm42688Fifo`]).
     fn read(&mut self) -> Result<ImuSample, Self::Error>;
 }

@@ -199,6 +199,11 @@ impl<I: Imu, M: PeriodicMonitor> MonitorTask<I, M> {
         &self.ukf
     }
 
+    /// The IMU driver (e.g. [`Icm42688Fifo::fifo_status`](crate::imu::Icm42688Fifo::fifo_status)).
+    pub fn imu(&self) -> &I {
+        &self.imu
+    }
+
     /// Releases the IMU driver.
     pub fn destroy(self) -> I {
         self.imu

@@ -4,7 +4,8 @@
 use anyhow::{bail, Result};
 
 use hal_sim::array::ArrayKind;
-use imu_fdi_cli::eval::parity_campaign::{fault_free, steps};
+use hal_sim::realistic::RealisticProfile;
+use imu_fdi_cli::eval::parity_campaign::{fault_free_on, steps_on};
 
 // The arguments of `parity-realistic` (help on `Cmd::ParityRealistic`).
 #[derive(clap::Args)]
@@ -18,6 +19,10 @@ pub(crate) struct Args {
     /// Rounds of steps per size (18 flights each: IMU × axis × sign).
     #[arg(long, default_value_t = 2)]
     rounds: u64,
+    /// Log the IMUs integrated over each interval (delta angle / delta
+    /// velocity, as a FIFO driver hands them) instead of point-sampled.
+    #[arg(long)]
+    integrated: bool,
 }
 
 /// Runs `parity-realistic`.
@@ -28,8 +33,13 @@ pub(crate) fn run(a: Args) -> Result<()> {
         "both" => &[ArrayKind::Gyro, ArrayKind::Accel],
         other => bail!("--kind: '{other}' is not gyro, accel or both"),
     };
+    let profile = if a.integrated {
+        RealisticProfile::log171().integrated()
+    } else {
+        RealisticProfile::log171()
+    };
     for &kind in kinds {
-        let ff = fault_free(kind, a.hours, 1000)?;
+        let ff = fault_free_on(&profile, kind, a.hours, 1000)?;
         out!(
             "{kind:?}: {:.2} h fault-free: {} alarm events ({:.2}/h), {} sensors isolated",
             ff.hours,
@@ -46,7 +56,7 @@ pub(crate) fn run(a: Args) -> Result<()> {
                 ArrayKind::Gyro => s.to_radians(),
                 ArrayKind::Accel => s,
             };
-            let r = steps(kind, si, a.rounds, 1)?;
+            let r = steps_on(&profile, kind, si, a.rounds, 1)?;
             let med = r.delays.get(r.delays.len() / 2).copied();
             out!(
                 "  step {s} {unit}: {}/{} isolated within 10 s, {} flights with a false alarm, median delay {}",

@@ -95,7 +95,18 @@ fn run(
 /// `hours` of fault-free realistic flight, split into one-hour flights
 /// (seeds `seed..`), run on every core.
 pub fn fault_free(kind: ArrayKind, hours: u32, seed: u64) -> Result<FaultFree> {
-    let profile = RealisticProfile::log171().with_duration(3600.0 + TRAIN_S);
+    fault_free_on(&RealisticProfile::log171(), kind, hours, seed)
+}
+
+/// [`fault_free`] on another profile (e.g. `RealisticProfile::log171().integrated()`:
+/// the IMUs read as a FIFO driver integrates them, not point-sampled).
+pub fn fault_free_on(
+    profile: &RealisticProfile,
+    kind: ArrayKind,
+    hours: u32,
+    seed: u64,
+) -> Result<FaultFree> {
+    let profile = profile.with_duration(3600.0 + TRAIN_S);
     let runs: Vec<_> = (0..u64::from(hours))
         .into_par_iter()
         .map(|i| run(kind, &profile, seed + i, None))
@@ -114,7 +125,18 @@ pub fn fault_free(kind: ArrayKind, hours: u32, seed: u64) -> Result<FaultFree> {
 /// (onset 60 s, in the loiter/acro cycle), each with its own seed from
 /// `seed` on.
 pub fn steps(kind: ArrayKind, size: f64, seeds: u64, seed: u64) -> Result<Steps> {
-    let profile = RealisticProfile::log171().with_duration(100.0);
+    steps_on(&RealisticProfile::log171(), kind, size, seeds, seed)
+}
+
+/// [`steps`] on another profile.
+pub fn steps_on(
+    profile: &RealisticProfile,
+    kind: ArrayKind,
+    size: f64,
+    seeds: u64,
+    seed: u64,
+) -> Result<Steps> {
+    let profile = profile.with_duration(100.0);
     let channel0 = match kind {
         ArrayKind::Gyro => 3,
         ArrayKind::Accel => 0,
