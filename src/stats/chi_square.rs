@@ -84,7 +84,7 @@ pub fn chi_square_upper_quantile(alpha: f64, nu: u32) -> Result<f64, StatsError>
             return Ok(x + step);
         }
         let mut next = x + step;
-        if !(next > lo && next < hi) || !next.is_finite() {
+        if !(next > lo && next < hi && next.is_finite()) {
             next = if hi.is_finite() {
                 0.5 * (lo + hi)
             } else {

@@ -4,6 +4,9 @@
 //! 477–484, 1988), relative error about 1e-16 — no root finding, one `log`
 //! and one `sqrt`, so no `erfc` is linked for it.
 
+// The coefficients as Wichura printed them (more digits than f64 holds).
+#![allow(clippy::excessive_precision)]
+
 use super::StatsError;
 
 /// `Σ c_k r^k` by Horner's rule (`c` lowest order first).

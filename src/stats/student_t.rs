@@ -175,7 +175,7 @@ pub fn student_t_upper_quantile(alpha: f64, nu: f64) -> Result<f64, StatsError> 
             return Ok(t + step);
         }
         let mut next = t + step;
-        if !(next > lo && next < hi) || !next.is_finite() {
+        if !(next > lo && next < hi && next.is_finite()) {
             next = if hi.is_finite() {
                 0.5 * (lo + hi)
             } else {
