@@ -119,7 +119,8 @@ fn cornish_fisher(z: f64, nu: f64) -> f64 {
 
 /// Upper `alpha` quantile `t` with `P(T > t) = alpha`, for `alpha ∈ (0, 0.5]`.
 ///
-/// ν = 1 (Cauchy) and ν = 2 in closed form; otherwise Newton's method on
+/// ν = 2 in closed form (ν = 1, the Cauchy `1/tan(πα)`, would link the `f64`
+/// `tan` on the MCU); otherwise Newton's method on
 /// `ln P(T > t) − ln α` from the Cornish–Fisher expansion, safeguarded by
 /// bisection on the bracket the iterates build. From that start two or
 /// three evaluations of the tail suffice (the root finder used to begin
@@ -138,10 +139,6 @@ pub fn student_t_upper_quantile(alpha: f64, nu: f64) -> Result<f64, StatsError> 
     }
     if alpha == 0.5 {
         return Ok(0.0);
-    }
-    if nu == 1.0 {
-        // tan(π(½ − α)) = 1/tan(πα)
-        return Ok(1.0 / libm::tan(core::f64::consts::PI * alpha));
     }
     if nu == 2.0 {
         return Ok((1.0 - 2.0 * alpha) / libm::sqrt(2.0 * alpha * (1.0 - alpha)));

@@ -197,8 +197,11 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         }
     }
 
+    /// Floors the diagonal. Both callers built `P` as a lower triangle
+    /// mirrored onto the upper one, so it is exactly symmetric already: the
+    /// averaging `symmetrize` did here changed no bit (`(a + a)/2 = a`) and
+    /// cost ≈ 150 instructions per predict and per update on the M4F.
     fn condition(&mut self) {
-        symmetrize(&mut self.p);
         for (i, floor) in self.min_variance.iter().enumerate() {
             if let Some(pii) = self.p.get_mut((i, i)) {
                 if *pii < *floor {
