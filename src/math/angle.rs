@@ -10,6 +10,10 @@ const TWO_PI_TAIL: f64 = core::f64::consts::TAU - TWO_PI_HEAD;
 
 /// Wraps an angle to (−π, π]. Non-finite input is returned unchanged so that
 /// the caller's NaN check still sees it.
+///
+/// Only the range test is inlined: the reduction is rare (an angle crossing
+/// ±π) and, inlined at each of the filter's dozens of call sites, cost
+/// kilobytes of flash on the MCU (issue 17).
 #[inline]
 pub fn wrap_pi<T: Real>(a: T) -> T {
     let pi = T::pi();
@@ -17,6 +21,13 @@ pub fn wrap_pi<T: Real>(a: T) -> T {
     if a > -pi && a <= pi {
         return a;
     }
+    wrap_pi_reduce(a)
+}
+
+/// The reduction of [`wrap_pi`] for an angle outside (−π, π].
+#[inline(never)]
+fn wrap_pi_reduce<T: Real>(a: T) -> T {
+    let pi = T::pi();
     if !a.finite() {
         return a;
     }
