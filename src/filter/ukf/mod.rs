@@ -6,8 +6,8 @@ use super::{ChannelDiag, Gate, SigmaParams, SigmaWeights};
 
 mod split;
 use crate::math::{
-    add_outer_lower, cholesky, cholesky_solve_right, mirror_lower, symmetrize, wrap_pi,
-    LinalgError, Real,
+    add_outer_lower, cholesky, cholesky_solve_right, is_identity, mirror_lower, symmetrize,
+    wrap_pi, LinalgError, Real,
 };
 
 /// Why a UKF step did not complete normally.
@@ -426,7 +426,7 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         gate: &mut Gate<T, M>,
     ) -> Result<UpdateOutput<T, N, M>, UkfError<core::convert::Infallible>> {
         // H = I (M1) needs no products: P_xz = P, P_zz = P + R.
-        let (pxz, mut pzz) = if M == N && h.is_identity(T::zero()) {
+        let (pxz, mut pzz) = if M == N && is_identity(h) {
             let pxz = SMatrix::<T, N, M>::from_fn(|i, j| {
                 self.p.get((i, j)).copied().unwrap_or_else(T::zero)
             });
