@@ -12,13 +12,16 @@ use super::Real;
 /// infinity are never equal.
 pub fn is_identity<T: Real, const R: usize, const C: usize>(m: &SMatrix<T, R, C>) -> bool {
     let rel = T::default_max_relative();
-    m.as_slice().iter().enumerate().all(|(k, &v)| {
-        if k % R == k / R {
-            let one = T::one();
-            v == one || (v.finite() && (v - one).abs() <= v.abs().max(one) * rel)
-        } else {
-            v == T::zero()
-        }
+    let one = T::one();
+    // Column by column (the storage is column-major): no index arithmetic.
+    m.as_slice().chunks_exact(R).enumerate().all(|(j, col)| {
+        col.iter().enumerate().all(|(i, &v)| {
+            if i == j {
+                v == one || (v.finite() && (v - one).abs() <= v.abs().max(one) * rel)
+            } else {
+                v == T::zero()
+            }
+        })
     })
 }
 

@@ -430,13 +430,19 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
             let pxz = SMatrix::<T, N, M>::from_fn(|i, j| {
                 self.p.get((i, j)).copied().unwrap_or_else(T::zero)
             });
+            // P's lower triangle mirrored: `P` is symmetric to the bit (built
+            // mirrored), so this is `P` itself and needs no symmetrising.
             let pzz = SMatrix::<T, M, M>::from_fn(|i, j| {
-                self.p.get((i, j)).copied().unwrap_or_else(T::zero)
+                let (a, b) = if i >= j { (i, j) } else { (j, i) };
+                self.p.get((a, b)).copied().unwrap_or_else(T::zero)
             });
             (pxz, pzz)
         } else {
             let pxz = self.p * h.transpose();
-            let pzz = h * pxz;
+            // `H P Hᵀ` is symmetric only to rounding. (Adding R below
+            // changes the diagonal alone, so the order does not matter.)
+            let mut pzz = h * pxz;
+            symmetrize(&mut pzz);
             (pxz, pzz)
         };
         for (i, ri) in r.iter().enumerate() {
@@ -444,7 +450,6 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
                 *d += *ri;
             }
         }
-        symmetrize(&mut pzz);
         self.correct(
             z,
             z_center,
