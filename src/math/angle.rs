@@ -27,7 +27,6 @@ pub fn wrap_pi<T: Real>(a: T) -> T {
 /// The reduction of [`wrap_pi`] for an angle outside (−π, π].
 #[inline(never)]
 fn wrap_pi_reduce<T: Real>(a: T) -> T {
-    let pi = T::pi();
     if !a.finite() {
         return a;
     }
