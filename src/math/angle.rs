@@ -45,7 +45,9 @@ fn wrap_pi_reduce<T: Real>(a: T) -> T {
 }
 
 /// The last correction of [`wrap_pi_reduce`]: the reduced angle may land a
-/// rounding step outside (−π, π].
+/// rounding step outside (−π, π]. (One copy: three inlined ones cost flash
+/// for a path that runs only when an angle crosses ±π.)
+#[inline(never)]
 fn finish_wrap<T: Real>(mut w: T) -> T {
     let pi = T::pi();
     if w > pi {
