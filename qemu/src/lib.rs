@@ -7,7 +7,8 @@
 //! Run them with `cargo sil`, `cargo sil-chip`, `cargo target-tests` or
 //! `scripts/qemu-sil.sh`.
 //!
-//! The library holds what both images share: instruction counting.
+//! The library holds what both images share: instruction counting; and
+//! the comparison with the `kfilter` crate's UKF ([`kfilter_cmp`]).
 #![no_std]
 #![allow(unsafe_code)] // one volatile read of a peripheral register
 
@@ -23,3 +24,6 @@ pub fn instructions() -> u32 {
     // SAFETY: a read-only, aligned, always-mapped peripheral register.
     unsafe { core::ptr::read_volatile(TIM2_CNT) }
 }
+
+#[cfg(all(target_os = "none", feature = "sil"))]
+pub mod kfilter_cmp;

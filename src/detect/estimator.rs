@@ -18,7 +18,7 @@ pub fn estimate_as_written<T: Real>(
     rbar: &ImuVec<T>,
 ) -> Option<ImuVec<T>> {
     // M1's H is the identity: skip the product.
-    let hg = if h.is_identity(T::zero()) {
+    let hg = if crate::math::is_identity(h) {
         b * (-dt)
     } else {
         h * b * (-dt)

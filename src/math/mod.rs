@@ -4,6 +4,7 @@
 
 mod angle;
 mod cholesky;
+mod identity;
 mod jacobi;
 mod real;
 mod sqrt;
@@ -14,6 +15,7 @@ pub use cholesky::{
     add_outer_lower, cholesky, cholesky_reference, cholesky_solve_right, mirror_lower, symmetrize,
     LinalgError,
 };
+pub use identity::is_identity;
 pub use jacobi::symmetric_eigen;
 pub use real::Real;
 pub use sqrt::sqrt_f32;

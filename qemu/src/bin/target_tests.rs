@@ -386,6 +386,14 @@ fn main() -> ! {
     r.check("parity_flight_on_target", parity_flight_on_target());
     r.check("fifo_integration_on_target", fifo_integration_on_target());
     profile();
+    match imu_fdi_qemu::kfilter_cmp::predict_update_costs(50) {
+        Some((k, o)) => hprintln!(
+            "kfilter 0.5 UKF, same 6-state model and M2 aiding (f32): predict+update mean {} instructions; imu-fdi Ukf predict_split+update mean {}",
+            k,
+            o
+        ),
+        None => hprintln!("kfilter comparison: a filter failed"),
+    }
     hprintln!("on-target tests: {} passed, {} failed", r.passed, r.failed);
     debug::exit(if r.failed == 0 {
         debug::EXIT_SUCCESS

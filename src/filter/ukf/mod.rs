@@ -6,8 +6,8 @@ use super::{ChannelDiag, Gate, SigmaParams, SigmaWeights};
 
 mod split;
 use crate::math::{
-    add_outer_lower, cholesky, cholesky_solve_right, mirror_lower, symmetrize, wrap_pi,
-    LinalgError, Real,
+    add_outer_lower, cholesky, cholesky_solve_right, is_identity, mirror_lower, symmetrize,
+    wrap_pi, LinalgError, Real,
 };
 
 /// Why a UKF step did not complete normally.
@@ -197,8 +197,11 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         }
     }
 
+    /// Floors the diagonal. Both callers built `P` as a lower triangle
+    /// mirrored onto the upper one, so it is exactly symmetric already: the
+    /// averaging `symmetrize` did here changed no bit (`(a + a)/2 = a`) and
+    /// cost ≈ 150 instructions per predict and per update on the M4F.
     fn condition(&mut self) {
-        symmetrize(&mut self.p);
         for (i, floor) in self.min_variance.iter().enumerate() {
             if let Some(pii) = self.p.get_mut((i, i)) {
                 if *pii < *floor {
@@ -423,17 +426,23 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         gate: &mut Gate<T, M>,
     ) -> Result<UpdateOutput<T, N, M>, UkfError<core::convert::Infallible>> {
         // H = I (M1) needs no products: P_xz = P, P_zz = P + R.
-        let (pxz, mut pzz) = if M == N && h.is_identity(T::zero()) {
+        let (pxz, mut pzz) = if M == N && is_identity(h) {
             let pxz = SMatrix::<T, N, M>::from_fn(|i, j| {
                 self.p.get((i, j)).copied().unwrap_or_else(T::zero)
             });
+            // P's lower triangle mirrored: `P` is symmetric to the bit (built
+            // mirrored), so this is `P` itself and needs no symmetrising.
             let pzz = SMatrix::<T, M, M>::from_fn(|i, j| {
-                self.p.get((i, j)).copied().unwrap_or_else(T::zero)
+                let (a, b) = if i >= j { (i, j) } else { (j, i) };
+                self.p.get((a, b)).copied().unwrap_or_else(T::zero)
             });
             (pxz, pzz)
         } else {
             let pxz = self.p * h.transpose();
-            let pzz = h * pxz;
+            // `H P Hᵀ` is symmetric only to rounding. (Adding R below
+            // changes the diagonal alone, so the order does not matter.)
+            let mut pzz = h * pxz;
+            symmetrize(&mut pzz);
             (pxz, pzz)
         };
         for (i, ri) in r.iter().enumerate() {
@@ -441,7 +450,6 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
                 *d += *ri;
             }
         }
-        symmetrize(&mut pzz);
         self.correct(
             z,
             z_center,
