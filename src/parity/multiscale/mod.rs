@@ -48,17 +48,15 @@
 use nalgebra::{SMatrix, SVector, Vector3};
 
 use crate::math::{cholesky, cholesky_solve_right, Real};
-use crate::stats::student_t_upper_quantile;
+use crate::stats::{student_t_cornish_fisher, student_t_upper_quantile};
 
 mod config;
 mod glr;
-mod quantile;
 mod scale;
 mod training;
 
 pub use config::MultiscaleConfig;
 use glr::{best_two, mahalanobis2, pad};
-use quantile::student_t_cornish_fisher;
 use scale::VibrationScale;
 
 /// Sensors whose own vibration energy is a regressor (the first nine).
