@@ -110,6 +110,12 @@ enum Cmd {
     Simulate(cmd::simulate::Args),
     /// Replay a SPEC §10 CSV through the monitor (default detector: run-time matrix + GLR).
     Replay(cmd::replay::Args),
+    /// A flight report: any log (.ulg, .bin, SPEC §10 CSV; one or three
+    /// IMUs) replayed into one self-contained HTML page that opens offline:
+    /// verdict per IMU channel, fault estimates with flags, innovations
+    /// ±3σ, parity residuals and tests with the PX4-like and ArduPilot-like
+    /// baselines, status timeline; zoom and pan over the whole log.
+    Report(cmd::report::Args),
 }
 
 /// Errors reach the user as one line on stderr (`error: what: why`, the
@@ -144,5 +150,6 @@ fn run(cmd: Cmd) -> Result<()> {
         Cmd::Detections(a) => cmd::detections::run(a),
         Cmd::Simulate(a) => cmd::simulate::run(a),
         Cmd::Replay(a) => cmd::replay::run(a),
+        Cmd::Report(a) => cmd::report::run(a),
     }
 }

@@ -22,6 +22,8 @@ pub(crate) mod parity_replay;
 pub(crate) mod parity_sweep;
 pub(crate) mod parity_table;
 pub(crate) mod plot;
+pub(crate) mod progress;
+pub(crate) mod report;
 pub(crate) mod replay;
 pub(crate) mod scenario;
 pub(crate) mod simulate;

@@ -7,7 +7,9 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 use nalgebra::Matrix3;
 
-use imu_fdi::parity::{Geometry, ParityConfig, ParityMonitor, Reading, SensorStatus};
+use imu_fdi::parity::{
+    Geometry, ParityConfig, ParityMonitor, ParityReport, Reading, SensorStatus,
+};
 
 use hal_sim::array::ArrayKind;
 use hal_sim::baseline::{ArduPilotLike, Px4Like};
@@ -213,6 +215,45 @@ pub fn replay_parity_with(
     injection: Option<Injection>,
     method: ParityMethod,
 ) -> Result<ParityReplay> {
+    replay_parity_observed(
+        log,
+        kind,
+        train_start,
+        train_s,
+        injection,
+        method,
+        &mut |_: &ParityStep<'_>| {},
+    )
+}
+
+/// One step of a parity replay as [`replay_parity_observed`] hands it to
+/// its observer (the flight report plots these).
+#[derive(Debug, Clone, Copy)]
+pub struct ParityStep<'a> {
+    /// Log time, s.
+    pub t: f64,
+    /// The nine readings given to the monitor (sensor = 3·IMU + axis),
+    /// injection included.
+    pub readings: &'a [Reading<f32>; 9],
+    /// The monitor's report of this step.
+    pub report: &'a ParityReport<f32, 9>,
+    /// PX4-like baseline: the IMU it blames this step.
+    pub px4: Option<usize>,
+    /// ArduPilot-like baseline: alarm this step.
+    pub ardupilot: bool,
+}
+
+/// [`replay_parity_with`], calling `observe` after every step from
+/// `train_start` on.
+pub fn replay_parity_observed(
+    log: &ImuLog,
+    kind: ArrayKind,
+    train_start: f64,
+    train_s: f64,
+    injection: Option<Injection>,
+    method: ParityMethod,
+    observe: &mut dyn FnMut(&ParityStep<'_>),
+) -> Result<ParityReplay> {
     if log.count != 3 {
         bail!(
             "the parity replay needs three IMUs, the log has {}",
@@ -325,6 +366,13 @@ pub fn replay_parity_with(
         edge(&mut out.px4, blame.is_some(), &mut was_px4, *t, blame);
         let alarm = ap.step(&diff, *t);
         edge(&mut out.ardupilot, alarm, &mut was_ap, *t, None);
+        observe(&ParityStep {
+            t: *t,
+            readings: &readings,
+            report: &r,
+            px4: blame,
+            ardupilot: alarm,
+        });
     }
     out.threshold_scales = monitor.threshold_scales().map(f64::from);
     out.correlation_factor = monitor
