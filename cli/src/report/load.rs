@@ -94,7 +94,12 @@ pub fn build(
             crate::eval::parity_replay::read_imu_log(&csv)
                 .with_context(|| format!("{}: reading the IMUs", input.display()))?
         };
-        report.notes.extend(log.warnings.iter().cloned());
+        for w in &log.warnings {
+            // The conversion may have said the same already.
+            if !report.notes.iter().any(|n| n.ends_with(w.as_str())) {
+                report.notes.push(format!("warning: {w}"));
+            }
+        }
         super::parity::add(&log, opts.parity, &mut report)?;
     } else {
         report.verdicts.extend(super::verdict::not_judged(

@@ -199,9 +199,21 @@ pub fn add(csv: &Path, imus: usize, report: &mut FlightReport) -> Result<()> {
     };
     let opts = crate::eval::replay::ReplayOptions::default();
     let mut tracks: Vec<Track> = (0..imus).map(Track::new).collect();
+    // Samples where every IMU flags a channel at once: the aiding or the
+    // model, not one IMU (SPEC §8b).
+    let mut common = [0usize; 6];
     let run = crate::eval::replay::replay_observed(csv, None, None, sim_cfg, &opts, &mut |t, rs| {
         for (tr, r) in tracks.iter_mut().zip(rs) {
             tr.see(t, r);
+        }
+        for (i, c) in common.iter_mut().enumerate() {
+            let flagged = |r: &Report<f64>| {
+                r.phase == Phase::Monitoring
+                    && r.status.get(i).and_then(|s| s.sign()).is_some_and(|s| s != 0)
+            };
+            if rs.len() >= 2 && rs.iter().all(flagged) {
+                *c += 1;
+            }
         }
     });
     let sum = match run {
@@ -230,13 +242,15 @@ pub fn add(csv: &Path, imus: usize, report: &mut FlightReport) -> Result<()> {
         sum.monitoring_from_s
             .map_or("never".to_string(), |t| format!("{t:.2} s"))
     ));
+    let dt = 1.0 / sum.imu_rate_hz.max(1e-9);
+    let common_s = common.map(|n| n as f64 * dt);
     for (k, tr) in tracks.into_iter().enumerate() {
-        add_imu(k, tr, report);
+        add_imu(k, tr, &common_s, report);
     }
     Ok(())
 }
 
-fn add_imu(k: usize, tr: Track, report: &mut FlightReport) {
+fn add_imu(k: usize, tr: Track, common_s: &[f64; 6], report: &mut FlightReport) {
     let Track {
         fhat,
         innov,
@@ -270,13 +284,21 @@ fn add_imu(k: usize, tr: Track, report: &mut FlightReport) {
                     }
                     _ => "back to healthy at the end of the log".to_string(),
                 };
+                let flagged = flagged_s.get(i).copied().unwrap_or(0.0);
+                let shared = common_s.get(i).copied().unwrap_or(0.0);
+                let common = if shared > 0.0 {
+                    format!(
+                        "; every IMU flagged this channel at once for {shared:.1} s of it (the aiding or the model rather than this IMU)"
+                    )
+                } else {
+                    String::new()
+                };
                 (
                     State::Faulty,
                     Some(t),
                     format!(
-                        "flagged {} in {episodes} episode(s), {:.1} s in all; fault estimate {fe:+.3} {unit} at the first flag; {now}",
+                        "flagged {} in {episodes} episode(s), {flagged:.1} s in all; fault estimate {fe:+.3} {unit} at the first flag; {now}{common}",
                         if s > 0 { "positive" } else { "negative" },
-                        flagged_s.get(i).copied().unwrap_or(0.0)
                     ),
                 )
             }
