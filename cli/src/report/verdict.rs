@@ -32,7 +32,7 @@ impl State {
 pub struct Verdict {
     /// IMU index.
     pub imu: usize,
-    /// Channel: `a_x`, `a_y`, `a_z`, `g_x`, `g_y`, `g_z`.
+    /// Channel: `ax`, `ay`, `az`, `gx`, `gy`, `gz` (the SPEC §10 column names).
     pub channel: String,
     /// `ukf` (innovation monitor) or `parity` (redundant IMUs).
     pub monitor: String,
@@ -44,8 +44,8 @@ pub struct Verdict {
     pub why: String,
 }
 
-/// Channel names of the table, in the order `[a_x … g_z]`.
-pub const CHANNELS: [&str; 6] = ["a_x", "a_y", "a_z", "g_x", "g_y", "g_z"];
+/// Channel names of the table, in the order `[ax … gz]`.
+pub const CHANNELS: [&str; 6] = ["ax", "ay", "az", "gx", "gy", "gz"];
 
 /// Six "not judged" rows for IMU `imu` and `monitor`, all with `why`.
 pub fn not_judged(imu: usize, monitor: &str, why: &str) -> Vec<Verdict> {
