@@ -89,7 +89,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         let a = scn.sizes.accel;
         let g = scn.sizes.gyro;
         rows.push(serde_json::json!({
-            "factor": f,
+            "scale_factor": f,
             "accel_a_m_s2": a[0],
             "accel_b_m_s3": a[1],
             "accel_c_m_s2": a[2],
