@@ -17,8 +17,22 @@ use serde_json::Value;
 /// Unit suffixes (SI with `_` for `/` and powers as digits) and the
 /// dimensionless ones.
 const SUFFIXES: [&str; 16] = [
-    "_s", "_hz", "_h", "_per_hour", "_m_s", "_m_s2", "_m_s3", "_rad", "_rad_s", "_rad_s2", "_deg",
-    "_deg_s", "_bytes", "_fraction", "_factor", "_ratio",
+    "_s",
+    "_hz",
+    "_h",
+    "_per_hour",
+    "_m_s",
+    "_m_s2",
+    "_m_s3",
+    "_rad",
+    "_rad_s",
+    "_rad_s2",
+    "_deg",
+    "_deg_s",
+    "_bytes",
+    "_fraction",
+    "_factor",
+    "_ratio",
 ];
 
 fn data(name: &str) -> String {
@@ -48,8 +62,8 @@ fn json(args: &[&str]) -> Value {
     );
     let out = String::from_utf8(o.stdout).unwrap();
     assert_eq!(out.lines().count(), 1, "{args:?}: not one line:\n{out}");
-    let v: Value = serde_json::from_str(&out)
-        .unwrap_or_else(|e| panic!("{args:?}: not JSON ({e}):\n{out}"));
+    let v: Value =
+        serde_json::from_str(&out).unwrap_or_else(|e| panic!("{args:?}: not JSON ({e}):\n{out}"));
     assert!(v.is_object(), "{args:?}: not an object");
     let mut problems = Vec::new();
     check(&v, "", "", &mut problems);
@@ -86,12 +100,10 @@ fn check(v: &Value, key: &str, parent: &str, problems: &mut Vec<String>) {
                 check(x, key, parent, problems);
             }
         }
-        Value::Number(n) if n.is_f64() => {
-            if !has_unit(key) && !has_unit(parent) {
-                problems.push(format!(
-                    "`{key}` (in `{parent}`) holds {n} with no unit in its name"
-                ));
-            }
+        Value::Number(n) if n.is_f64() && !has_unit(key) && !has_unit(parent) => {
+            problems.push(format!(
+                "`{key}` (in `{parent}`) holds {n} with no unit in its name"
+            ));
         }
         _ => {}
     }
@@ -117,12 +129,25 @@ fn simulations_and_tables() {
     assert_eq!(v["isolated_right"], 1);
     assert!(v["runs"][0]["isolated_at_s"].as_f64().unwrap() > 6.0);
     let csv = tmp("c.csv");
-    let v = json(&["campaign", "s2", "--runs", "4", "--csv", csv.to_str().unwrap(), "--json"]);
+    let v = json(&[
+        "campaign",
+        "s2",
+        "--runs",
+        "4",
+        "--csv",
+        csv.to_str().unwrap(),
+        "--json",
+    ]);
     assert_eq!(v["summary"]["runs"], 4);
-    let d = v["summary"]["detection_fraction"]["value"].as_f64().unwrap();
+    let d = v["summary"]["detection_fraction"]["value"]
+        .as_f64()
+        .unwrap();
     assert!((0.0..=1.0).contains(&d));
     let m = json(&["merge", csv.to_str().unwrap(), "--json"]);
-    assert_eq!(m["summary"], v["summary"], "merge of one shard = the campaign");
+    assert_eq!(
+        m["summary"], v["summary"],
+        "merge of one shard = the campaign"
+    );
     let v = json(&["scenario", "s2", "--seeds", "1", "--json"]);
     let ch = v["metrics"]["channels"].as_array().unwrap();
     assert_eq!(ch.len(), 6);
@@ -135,7 +160,10 @@ fn simulations_and_tables() {
     let f = v["faults"].as_array().unwrap();
     assert!(!f.is_empty());
     for x in f {
-        assert_eq!(keys(x), ["channel", "delay_s", "detected_s", "end_s", "start_s"]);
+        assert_eq!(
+            keys(x),
+            ["channel", "delay_s", "detected_s", "end_s", "start_s"]
+        );
     }
     let v = json(&["parity-sweep", "--runs", "2", "--hours", "1", "--json"]);
     assert!(v["methods"][0]["sizes"][0].get("size_rad_s").is_some());
@@ -168,7 +196,15 @@ fn logs() {
         assert!(v["gyro"].get(k).is_some(), "{k}");
     }
     let v = json(&[
-        "parity-table", &log, "--size", "5", "--train-starts", "80", "--onsets", "5", "--json",
+        "parity-table",
+        &log,
+        "--size",
+        "5",
+        "--train-starts",
+        "80",
+        "--onsets",
+        "5",
+        "--json",
     ]);
     assert_eq!(v["cases"].as_array().unwrap().len(), 18);
     assert_eq!(v["cases"][0]["injection"]["size_deg_s"], 5.0);
@@ -183,7 +219,14 @@ fn logs() {
 #[ignore]
 fn parity_realistic() {
     let v = json(&[
-        "parity-realistic", "--hours", "1", "--rounds", "1", "--kind", "gyro", "--json",
+        "parity-realistic",
+        "--hours",
+        "1",
+        "--rounds",
+        "1",
+        "--kind",
+        "gyro",
+        "--json",
     ]);
     assert_eq!(v["kinds"][0]["steps"].as_array().unwrap().len(), 4);
 }

@@ -112,12 +112,21 @@ fn attrs<'a>(dom: &'a str, name: &str) -> Vec<&'a str> {
 /// Checks a rendered page: script finished, no error, every plot drew
 /// points. Returns the number of plots drawn.
 fn check_dom(dom: &str, what: &str) -> usize {
-    assert_eq!(attrs(dom, "data-render"), ["done"], "{what}: the script did not finish");
+    assert_eq!(
+        attrs(dom, "data-render"),
+        ["done"],
+        "{what}: the script did not finish"
+    );
     assert_eq!(
         attrs(dom, "data-js-errors"),
         ["0"],
         "{what}: JavaScript errors: {}",
-        dom.split("id=\"js-errors\">").nth(1).unwrap_or("").split("</pre>").next().unwrap_or("")
+        dom.split("id=\"js-errors\">")
+            .nth(1)
+            .unwrap_or("")
+            .split("</pre>")
+            .next()
+            .unwrap_or("")
     );
     assert_eq!(attrs(dom, "data-empty-plots"), [""], "{what}: empty plots");
     let points = attrs(dom, "data-points");
@@ -160,7 +169,9 @@ fn every_shipped_log_gives_a_page_that_renders_without_errors() {
         assert_eq!(x["state"], "not_judged");
         assert!(x["why"].as_str().unwrap().contains("no aiding"), "{x}");
     }
-    assert!(verdicts(csv, "parity").iter().all(|x| x["state"] != "not_judged"));
+    assert!(verdicts(csv, "parity")
+        .iter()
+        .all(|x| x["state"] != "not_judged"));
     let bin = &pages[1].1;
     assert_eq!(bin["imus"], 3);
     assert_eq!(bin["not_judged"], 0, "{bin}");
@@ -207,7 +218,11 @@ fn every_shipped_log_gives_a_page_that_renders_without_errors() {
         .unwrap();
     assert!(o.status.success());
     let png = std::fs::read(&shot).unwrap();
-    assert!(png.starts_with(b"\x89PNG") && png.len() > 50_000, "{} bytes", png.len());
+    assert!(
+        png.starts_with(b"\x89PNG") && png.len() > 50_000,
+        "{} bytes",
+        png.len()
+    );
 }
 
 #[test]
@@ -225,6 +240,9 @@ fn a_bad_log_is_one_line_on_stderr() {
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(err.starts_with("error: ") && err.contains("bad.bin"), "{err}");
+    assert!(
+        err.starts_with("error: ") && err.contains("bad.bin"),
+        "{err}"
+    );
     assert!(!dir.join("bad.html").exists());
 }

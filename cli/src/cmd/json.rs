@@ -95,9 +95,7 @@ pub(crate) fn metrics(m: &RunMetrics) -> Value {
 /// A campaign summary in the JSON convention (intervals as `{value, low,
 /// high}` under a key carrying the unit).
 pub(crate) fn campaign_summary(s: &imu_fdi_cli::eval::campaign::CampaignSummary) -> Value {
-    let iv = |i: &imu_fdi_cli::eval::campaign::Interval| {
-        json!({"value": i.value, "low": i.low, "high": i.high})
-    };
+    let iv = |i: &imu_fdi_cli::eval::campaign::Interval| json!({"value": i.value, "low": i.low, "high": i.high});
     json!({
         "runs": s.runs,
         "first_index": s.index_range.0,
@@ -115,5 +113,8 @@ pub(crate) fn campaign_summary(s: &imu_fdi_cli::eval::campaign::CampaignSummary)
 
 /// Files written, as strings.
 pub(crate) fn files(v: &[PathBuf]) -> Value {
-    json!(v.iter().map(|p| p.display().to_string()).collect::<Vec<_>>())
+    json!(v
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>())
 }

@@ -37,13 +37,17 @@ pub(crate) fn run(a: Args) -> Result<()> {
         let mut steps_json = Vec::new();
         if !a.json {
             out!(
-            "{}: {:.2} h fault-free: {} alarm events ({:.2}/h), {} sensors isolated",
-            if kind == ArrayKind::Gyro { "gyro" } else { "accel" },
-            ff.hours,
-            ff.alarm_events,
-            ff.alarm_events as f64 / ff.hours.max(1e-9),
-            ff.isolations
-        );
+                "{}: {:.2} h fault-free: {} alarm events ({:.2}/h), {} sensors isolated",
+                if kind == ArrayKind::Gyro {
+                    "gyro"
+                } else {
+                    "accel"
+                },
+                ff.hours,
+                ff.alarm_events,
+                ff.alarm_events as f64 / ff.hours.max(1e-9),
+                ff.isolations
+            );
         }
         let (unit, sizes): (&str, &[f64]) = match kind {
             ArrayKind::Gyro => ("°/s", &[0.5, 1.0, 2.0, 3.0]),

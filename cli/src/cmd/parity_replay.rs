@@ -149,7 +149,11 @@ pub(crate) fn parity_replay_cmd(
     for kind in [ArrayKind::Gyro, ArrayKind::Accel] {
         let inj = inj.filter(|i| (i.channel >= 3) == (kind == ArrayKind::Gyro));
         let r = replay_parity_with(&log, kind, train_start, train_s, inj, method)?;
-        let kind_name = if kind == ArrayKind::Gyro { "gyro" } else { "accel" };
+        let kind_name = if kind == ArrayKind::Gyro {
+            "gyro"
+        } else {
+            "accel"
+        };
         out!("{kind_name} (sensor = 3 x IMU + axis):");
         if method == imu_fdi_cli::eval::parity_replay::ParityMethod::GltCusum {
             out!(

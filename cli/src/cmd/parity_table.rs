@@ -75,7 +75,11 @@ pub(crate) fn run(a: Args) -> Result<()> {
             "end_s": i.end.is_finite().then_some(i.end),
         })
     };
-    let kind_name = if kind == ArrayKind::Gyro { "gyro" } else { "accel" };
+    let kind_name = if kind == ArrayKind::Gyro {
+        "gyro"
+    } else {
+        "accel"
+    };
     if a.power_up {
         let cases = power_up_table(&log, kind, size, &a.train_starts, a.train_s, a.end)?;
         let ok = cases.iter().filter(|c| c.delay.is_some()).count();

@@ -44,8 +44,13 @@ pub(crate) fn run(args: Args) -> Result<()> {
     } = args;
     // S4 is the redundant-sensor scenario: the parity monitor's run.
     if name.eq_ignore_ascii_case("s4") {
-        if json.as_ref().is_some_and(|p| !super::json::to_stdout(Some(p))) {
-            return Err(anyhow!("--json FILE: s4 prints its JSON on stdout (`--json` alone)"));
+        if json
+            .as_ref()
+            .is_some_and(|p| !super::json::to_stdout(Some(p)))
+        {
+            return Err(anyhow!(
+                "--json FILE: s4 prints its JSON on stdout (`--json` alone)"
+            ));
         }
         return parity_s4(seed, seeds.max(1), json.is_some());
     }

@@ -7,9 +7,7 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 use nalgebra::Matrix3;
 
-use imu_fdi::parity::{
-    Geometry, ParityConfig, ParityMonitor, ParityReport, Reading, SensorStatus,
-};
+use imu_fdi::parity::{Geometry, ParityConfig, ParityMonitor, ParityReport, Reading, SensorStatus};
 
 use hal_sim::array::ArrayKind;
 use hal_sim::baseline::{ArduPilotLike, Px4Like};

@@ -36,7 +36,7 @@ pub fn by_count(t: &[f64], y: &[f64], per: usize) -> Vec<Bucket> {
 pub fn by_time(t: &[f64], y: &[f64], t0: f64, t1: f64, columns: usize) -> Vec<Bucket> {
     let columns = columns.max(1);
     let width = (t1 - t0) / columns as f64;
-    if !(width > 0.0) {
+    if width.is_nan() || width <= 0.0 {
         return Vec::new();
     }
     let start = t.partition_point(|x| *x < t0);
@@ -49,7 +49,10 @@ pub fn by_time(t: &[f64], y: &[f64], t0: f64, t1: f64, columns: usize) -> Vec<Bu
     while i < ts.len() {
         let col = ((ts.get(i).copied().unwrap_or(t1) - t0) / width).floor();
         let col_end = t0 + (col + 1.0) * width;
-        let n = ts.get(i..).map_or(0, |r| r.partition_point(|x| *x < col_end)).max(1);
+        let n = ts
+            .get(i..)
+            .map_or(0, |r| r.partition_point(|x| *x < col_end))
+            .max(1);
         if let (Some(tc), Some(yc)) = (ts.get(i..i + n), ys.get(i..i + n)) {
             out.extend(bucket(tc, yc));
         }
@@ -121,7 +124,10 @@ mod tests {
         }
         // per = 1 is the identity.
         let id = by_count(&t[..10], &y[..10], 1);
-        assert!(id.iter().zip(&y[..10]).all(|(b, v)| b.lo == *v && b.hi == *v));
+        assert!(id
+            .iter()
+            .zip(&y[..10])
+            .all(|(b, v)| b.lo == *v && b.hi == *v));
     }
 
     #[test]

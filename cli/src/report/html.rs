@@ -240,3 +240,56 @@ svg.plot {{ width: 100%; display: block; margin: 6px 0; cursor: grab; font-famil
         js = include_str!("page.js"),
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::{Plot, Series, Stroke};
+
+    fn report_with(n: usize, spike_at: usize) -> FlightReport {
+        let mut s = Series::new("a </script>", "#000", Stroke::Solid);
+        for i in 0..n {
+            s.push(i as f64 * 0.0025, if i == spike_at { 77.0 } else { 0.5 });
+        }
+        let mut p = Plot::new("p", "title", "u");
+        p.series.push(s.clone());
+        let mut s2 = s;
+        s2.name = "b".into();
+        p.series.push(s2);
+        FlightReport {
+            source: "x.csv".into(),
+            span_s: (0.0, n as f64 * 0.0025),
+            plots: vec![p],
+            ..FlightReport::default()
+        }
+    }
+
+    #[test]
+    fn a_long_series_is_embedded_as_an_envelope_that_keeps_its_spike() {
+        let n = 4 * MAX_POINTS + 3;
+        let (json, decimated) = data(&report_with(n, 123_457));
+        assert_eq!(decimated, 2);
+        let v: serde_json::Value = serde_json::from_str(&json.replace("<\\/", "</")).unwrap();
+        let s = &v["plots"][0]["series"][0];
+        let hi = s["hi"].as_array().unwrap();
+        assert!(hi.len() <= MAX_POINTS, "{}", hi.len());
+        assert_eq!(hi.iter().filter(|x| x.as_f64() == Some(77.0)).count(), 1);
+        // Both series share one time array.
+        assert_eq!(v["times"].as_array().unwrap().len(), 1);
+        assert!(!json.contains("</script>"));
+    }
+
+    #[test]
+    fn a_short_series_is_embedded_sample_by_sample() {
+        let (json, decimated) = data(&report_with(1000, 10));
+        assert_eq!(decimated, 0);
+        let v: serde_json::Value = serde_json::from_str(&json.replace("<\\/", "</")).unwrap();
+        let s = &v["plots"][0]["series"][0];
+        assert!(s.get("hi").is_none());
+        assert_eq!(s["lo"].as_array().unwrap().len(), 1000);
+        assert_eq!(s["lo"][10], 77.0);
+        let page = page(&report_with(1000, 10));
+        assert!(page.contains("data-js-errors=\"0\"") && page.contains("window.onerror"));
+        assert!(!page.contains("http://") || !page.contains("src=\"http"));
+    }
+}

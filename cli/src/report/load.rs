@@ -26,7 +26,8 @@ impl Drop for TempFile {
 }
 
 fn is_spec_csv(path: &Path) -> bool {
-    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
         && crate::io::log_import::open_csv(path).is_ok_and(|(_, h)| h.iter().any(|c| c == "t"))
 }
 
@@ -45,9 +46,10 @@ pub fn build(
     step: &mut dyn FnMut(&str),
 ) -> Result<FlightReport> {
     let mut report = FlightReport {
-        source: input
-            .file_name()
-            .map_or_else(|| input.display().to_string(), |n| n.to_string_lossy().into()),
+        source: input.file_name().map_or_else(
+            || input.display().to_string(),
+            |n| n.to_string_lossy().into(),
+        ),
         ..FlightReport::default()
     };
     let _temp;
@@ -113,9 +115,7 @@ pub fn build(
         .into_iter()
         .partition(|p| p.series.iter().any(|s| s.y.iter().any(|v| v.is_finite())));
     for p in empty {
-        report
-            .notes
-            .push(format!("no data to plot: {}", p.title));
+        report.notes.push(format!("no data to plot: {}", p.title));
     }
     report.plots = keep;
     let (lo, hi) = report

@@ -111,10 +111,14 @@ fn add_kind(
         if monitoring && r.decision {
             ratio.push(t, f64::from(r.multiscale.ratio));
         }
-        let who = |k: Option<usize>| k.map_or(String::new(), |k| format!(" (IMU {} {})", k / 3, axes.get(k % 3).unwrap_or(&"")));
+        let who = |k: Option<usize>| {
+            k.map_or(String::new(), |k| {
+                format!(" (IMU {} {})", k / 3, axes.get(k % 3).unwrap_or(&""))
+            })
+        };
         alarm.see(
             t,
-            (monitoring && r.fault).then(|| ("parity alarm", "#d62728")),
+            (monitoring && r.fault).then_some(("parity alarm", "#d62728")),
         );
         if monitoring && r.fault {
             if let Some(c) = r.suspect.and_then(|k| suspected.get_mut(k)) {
@@ -123,7 +127,11 @@ fn add_kind(
         }
         let px4_label = s.px4.map(|k| format!("PX4-like: IMU {k} blamed"));
         px4.see(t, px4_label.as_deref().map(|l| (l, "#ff7f0e")));
-        ap.see(t, s.ardupilot.then_some(("ArduPilot-like: inconsistent", "#8c564b")));
+        ap.see(
+            t,
+            s.ardupilot
+                .then_some(("ArduPilot-like: inconsistent", "#8c564b")),
+        );
         for (imu, lane) in lanes.iter_mut().enumerate() {
             let bad: Vec<String> = (0..3)
                 .filter_map(|a| {
@@ -133,10 +141,7 @@ fn add_kind(
                 })
                 .collect();
             let label = bad.join(", ");
-            lane.see(
-                t,
-                (!bad.is_empty()).then_some((label.as_str(), "#e377c2")),
-            );
+            lane.see(t, (!bad.is_empty()).then_some((label.as_str(), "#e377c2")));
         }
         for (k, st) in r.status.iter().enumerate() {
             if st.is_failed() {

@@ -26,7 +26,7 @@ pub fn esc(s: &str) -> String {
 /// About `n` round tick values covering `[lo, hi]`.
 pub fn ticks(lo: f64, hi: f64, n: usize) -> Vec<f64> {
     let span = hi - lo;
-    if !(span > 0.0) || !span.is_finite() {
+    if span.is_nan() || span <= 0.0 || !span.is_finite() {
         return vec![lo];
     }
     let raw = span / n.max(1) as f64;
@@ -256,7 +256,10 @@ mod tests {
     #[test]
     fn ticks_are_round_and_cover_the_range() {
         assert_eq!(ticks(0.0, 10.0, 5), vec![0.0, 2.0, 4.0, 6.0, 8.0, 10.0]);
-        assert_eq!(ticks(60.0, 254.0, 10), (3..=12).map(|i| i as f64 * 20.0).collect::<Vec<_>>());
+        assert_eq!(
+            ticks(60.0, 254.0, 10),
+            (3..=12).map(|i| i as f64 * 20.0).collect::<Vec<_>>()
+        );
         assert_eq!(fmt_tick(0.30000000000000004), "0.3");
         assert_eq!(ticks(1.0, 1.0, 5), vec![1.0]);
     }

@@ -93,7 +93,8 @@ impl Track {
                 Phase::Monitoring => ("monitoring", "#9fd89f"),
             }),
         );
-        self.health.see(t, health_label(&r.health).map(|l| (l, "#e6a23c")));
+        self.health
+            .see(t, health_label(&r.health).map(|l| (l, "#e6a23c")));
         for i in 0..6 {
             let unit = if i >= 3 { DEG } else { 1.0 };
             let fe = r.fault_estimate.get(i).copied().unwrap_or(f64::NAN);
@@ -126,7 +127,11 @@ impl Track {
                 }
             }
             if let Some(l) = self.last_state.get_mut(i) {
-                *l = if monitoring { st } else { ChannelState::NotMonitored };
+                *l = if monitoring {
+                    st
+                } else {
+                    ChannelState::NotMonitored
+                };
             }
         }
         if r.updated {
@@ -202,20 +207,24 @@ pub fn add(csv: &Path, imus: usize, report: &mut FlightReport) -> Result<()> {
     // Samples where every IMU flags a channel at once: the aiding or the
     // model, not one IMU (SPEC §8b).
     let mut common = [0usize; 6];
-    let run = crate::eval::replay::replay_observed(csv, None, None, sim_cfg, &opts, &mut |t, rs| {
-        for (tr, r) in tracks.iter_mut().zip(rs) {
-            tr.see(t, r);
-        }
-        for (i, c) in common.iter_mut().enumerate() {
-            let flagged = |r: &Report<f64>| {
-                r.phase == Phase::Monitoring
-                    && r.status.get(i).and_then(|s| s.sign()).is_some_and(|s| s != 0)
-            };
-            if rs.len() >= 2 && rs.iter().all(flagged) {
-                *c += 1;
+    let run =
+        crate::eval::replay::replay_observed(csv, None, None, sim_cfg, &opts, &mut |t, rs| {
+            for (tr, r) in tracks.iter_mut().zip(rs) {
+                tr.see(t, r);
             }
-        }
-    });
+            for (i, c) in common.iter_mut().enumerate() {
+                let flagged = |r: &Report<f64>| {
+                    r.phase == Phase::Monitoring
+                        && r.status
+                            .get(i)
+                            .and_then(|s| s.sign())
+                            .is_some_and(|s| s != 0)
+                };
+                if rs.len() >= 2 && rs.iter().all(flagged) {
+                    *c += 1;
+                }
+            }
+        });
     let sum = match run {
         Ok(s) => s,
         Err(e) => {
@@ -325,10 +334,7 @@ fn add_imu(k: usize, tr: Track, common_s: &[f64; 6], report: &mut FlightReport) 
     // Fault estimates with flag bands, one plot per triad.
     let mut fhat = fhat.into_iter();
     let mut flags_it = flags.into_iter();
-    for (triad, unit, title) in [
-        ("accel", "m/s²", "accelerometer"),
-        ("gyro", "°/s", "gyro"),
-    ] {
+    for (triad, unit, title) in [("accel", "m/s²", "accelerometer"), ("gyro", "°/s", "gyro")] {
         let mut p = Plot::new(
             format!("imu{k}_{triad}_fault"),
             format!("IMU {k} {title}: UKF fault estimate and flags"),
