@@ -7,11 +7,13 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 /// `println!` that ends the program quietly when stdout is closed (e.g.
-/// piped into `head`) instead of panicking on the broken pipe.
+/// piped into `head`) instead of panicking on the broken pipe, and prints
+/// above a running progress spinner.
 macro_rules! out {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        if let Err(e) = writeln!(std::io::stdout().lock(), $($arg)*) {
+        let r = crate::cmd::progress::suspend(|| writeln!(std::io::stdout().lock(), $($arg)*));
+        if let Err(e) = r {
             if e.kind() == std::io::ErrorKind::BrokenPipe {
                 std::process::exit(0);
             }
@@ -23,7 +25,8 @@ macro_rules! out {
 macro_rules! out_nl {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        if let Err(e) = write!(std::io::stdout().lock(), $($arg)*) {
+        let r = crate::cmd::progress::suspend(|| write!(std::io::stdout().lock(), $($arg)*));
+        if let Err(e) = r {
             if e.kind() == std::io::ErrorKind::BrokenPipe {
                 std::process::exit(0);
             }

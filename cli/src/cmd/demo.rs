@@ -20,6 +20,7 @@ pub(crate) struct Args {
 
 /// Runs `demo`.
 pub(crate) fn run(args: Args) -> Result<()> {
+    let _progress = super::progress::spinner("demo: S1 and S2");
     let Args { seeds, json } = args;
     let seeds = seeds.max(1);
     let s1 = scenario("s1")?;

@@ -21,6 +21,7 @@ pub(crate) struct Args {
 
 /// Runs `gallery`.
 pub(crate) fn run(args: Args) -> Result<()> {
+    let _progress = super::progress::spinner("gallery");
     let Args { out, json } = args;
     use imu_fdi_cli::plot::TraceFigure as F;
     std::fs::create_dir_all(&out)?;

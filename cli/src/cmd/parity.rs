@@ -21,6 +21,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
 }
 
 pub(crate) fn parity_s4(first_seed: u64, seeds: u64, json: bool) -> Result<()> {
+    let _progress = super::progress::spinner("parity: S4 seeds");
     use hal_sim::array::ArraySpec;
     use imu_fdi_cli::eval::array_run::{array_config, run_array};
     if seeds == 0 {

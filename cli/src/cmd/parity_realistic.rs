@@ -25,6 +25,7 @@ pub(crate) struct Args {
 
 /// Runs `parity-realistic`.
 pub(crate) fn run(a: Args) -> Result<()> {
+    let _progress = super::progress::spinner("parity-realistic: simulated flights");
     let kinds: &[ArrayKind] = match a.kind.as_str() {
         "gyro" => &[ArrayKind::Gyro],
         "accel" => &[ArrayKind::Accel],

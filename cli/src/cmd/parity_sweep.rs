@@ -109,6 +109,7 @@ pub(crate) fn parity_sweep<const N: usize>(
         return Err(anyhow!("--runs must be at least 1"));
     }
     let started = std::time::Instant::now();
+    let _progress = super::progress::spinner("parity-sweep");
     let sizes = default_sizes(spec.kind);
     let result = sweep(spec, &sizes, runs, hours, first_seed)?;
     let unit = match spec.kind {

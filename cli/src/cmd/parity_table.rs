@@ -45,6 +45,7 @@ pub(crate) struct Args {
 
 /// Runs `parity-table`.
 pub(crate) fn run(a: Args) -> Result<()> {
+    let _progress = super::progress::spinner("parity-table: replaying the log per case");
     let kind = match a.kind.as_str() {
         "gyro" => ArrayKind::Gyro,
         "accel" => ArrayKind::Accel,

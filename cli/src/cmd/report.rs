@@ -55,7 +55,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
     let report = load::build(&args.input, &opts, &mut |what| {
         bar.set_message(format!("{}: {what}", args.input.display()));
     })?;
-    bar.set_message("writing");
+    bar.set_message("writing".into());
     let page = html::page(&report);
     std::fs::write(&out, &page).with_context(|| format!("cannot write {}", out.display()))?;
     let mut svgs = Vec::new();
@@ -72,7 +72,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
             .with_context(|| format!("cannot write {}", path.display()))?;
         svgs.push(path);
     }
-    bar.finish_and_clear();
+    drop(bar);
     let elapsed = start.elapsed().as_secs_f64();
     let [ok, bad, na] = verdict::counts(&report.verdicts);
     if args.json {

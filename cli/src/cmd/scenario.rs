@@ -60,6 +60,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
                  for the UKF monitor, `parity-replay` for redundant IMUs (see README, Real flight logs)"
             ));
     }
+    let _progress = super::progress::spinner("scenario");
     let scn = scenario(&name)?;
     let opts = options(&name, &detect);
     if let Some(p) = trace {

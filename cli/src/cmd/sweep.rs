@@ -25,6 +25,7 @@ pub(crate) struct Args {
 
 /// Runs `sweep`.
 pub(crate) fn run(args: Args) -> Result<()> {
+    let _progress = super::progress::spinner("sweep");
     let Args {
         name,
         factors,

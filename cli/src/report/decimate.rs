@@ -44,21 +44,32 @@ pub fn by_time(t: &[f64], y: &[f64], t0: f64, t1: f64, columns: usize) -> Vec<Bu
     let (Some(ts), Some(ys)) = (t.get(start..end), y.get(start..end)) else {
         return Vec::new();
     };
-    let mut out = Vec::new();
-    let mut i = 0;
-    while i < ts.len() {
-        let col = ((ts.get(i).copied().unwrap_or(t1) - t0) / width).floor();
-        let col_end = t0 + (col + 1.0) * width;
-        let n = ts
-            .get(i..)
-            .map_or(0, |r| r.partition_point(|x| *x < col_end))
-            .max(1);
-        if let (Some(tc), Some(yc)) = (ts.get(i..i + n), ys.get(i..i + n)) {
-            out.extend(bucket(tc, yc));
+    // One pass: a sample joins the last bucket when it falls in the same
+    // column (computed per sample, so rounding cannot split a column).
+    let mut out: Vec<(i64, Bucket)> = Vec::new();
+    for (ti, yi) in ts.iter().zip(ys) {
+        if !yi.is_finite() {
+            continue;
         }
-        i += n;
+        let col = ((ti - t0) / width).floor() as i64;
+        match out.last_mut() {
+            Some((c, b)) if *c == col => {
+                b.t1 = *ti;
+                b.lo = b.lo.min(*yi);
+                b.hi = b.hi.max(*yi);
+            }
+            _ => out.push((
+                col,
+                Bucket {
+                    t0: *ti,
+                    t1: *ti,
+                    lo: *yi,
+                    hi: *yi,
+                },
+            )),
+        }
     }
-    out
+    out.into_iter().map(|(_, b)| b).collect()
 }
 
 fn bucket(t: &[f64], y: &[f64]) -> Option<Bucket> {
