@@ -18,10 +18,14 @@ fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_imu-fdi-sim"))
 }
 
+/// The repository root: the logs are named relative to it, as a user in
+/// the repository would (the page quotes the path in its notes).
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
 fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/data")
-        .join(name)
+    Path::new("tests/data").join(name)
 }
 
 fn tmp_dir() -> PathBuf {
@@ -35,6 +39,7 @@ fn report(log: &str, dir: &Path) -> (serde_json::Value, PathBuf) {
     let html = dir.join(format!("{log}.html"));
     let svgs = dir.join(format!("{log}-svg"));
     let o = bin()
+        .current_dir(root())
         .arg("report")
         .arg(data(log))
         .arg("--out")
@@ -209,9 +214,9 @@ fn every_shipped_log_gives_a_page_that_renders_without_errors() {
     assert_eq!(attrs(&dom, "data-js-errors"), ["1"]);
     assert!(attrs(&dom, "data-render").is_empty());
     // The README's screenshot: the three-IMU DataFlash log.
-    let shot = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/img/report.png");
+    let shot = root().join("docs/img/report.png");
     let o = headless(browser)
-        .arg("--window-size=1200,1500")
+        .arg("--window-size=1200,2300")
         .arg(format!("--screenshot={}", shot.display()))
         .arg(format!("file://{}", pages[1].2.display()))
         .output()

@@ -146,7 +146,14 @@ fn add_kind(
         for (k, st) in r.status.iter().enumerate() {
             if st.is_failed() {
                 if let Some(f) = failed.get_mut(k) {
-                    f.get_or_insert((t, *st, f64::from(r.bias_estimate) * scale));
+                    // The monitor's bias estimate is its suspect's: quote
+                    // it only for that sensor.
+                    let bias = if r.suspect == Some(k) {
+                        f64::from(r.bias_estimate) * scale
+                    } else {
+                        f64::NAN
+                    };
+                    f.get_or_insert((t, *st, bias));
                 }
             }
         }
@@ -182,7 +189,7 @@ fn add_kind(
             (_, Some((t, st, bias))) => (
                 State::Faulty,
                 Some(*t),
-                if *st == SensorStatus::ParityIsolated {
+                if *st == SensorStatus::ParityIsolated && bias.is_finite() {
                     format!("{}; bias estimate {bias:+.3} {unit}", status_text(*st))
                 } else {
                     status_text(*st).to_string()

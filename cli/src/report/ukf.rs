@@ -247,13 +247,23 @@ pub fn add(csv: &Path, imus: usize, report: &mut FlightReport) -> Result<()> {
         sum.profile.to_lowercase(),
         sum.imus,
         sum.imu_rate_hz,
-        sum.aiding,
+        match sum.aiding.as_str() {
+            "GnssAttitude" => "GNSS velocity and attitude",
+            "DvlCompass" => "DVL velocity and compass attitude",
+            other => other,
+        },
         sum.monitoring_from_s
             .map_or("never".to_string(), |t| format!("{t:.2} s"))
     ));
     let dt = 1.0 / sum.imu_rate_hz.max(1e-9);
     let common_s = common.map(|n| n as f64 * dt);
-    for (k, tr) in tracks.into_iter().enumerate() {
+    for (k, mut tr) in tracks.into_iter().enumerate() {
+        if sum.aiding == "DvlCompass" {
+            // DVL velocity is in the body frame, not north-east-down.
+            for (s, name) in tr.innov.iter_mut().zip(["u", "v", "w"]) {
+                s.name = name.into();
+            }
+        }
         add_imu(k, tr, &common_s, report);
     }
     Ok(())
