@@ -5,7 +5,7 @@
 //!
 //! Only the report fields every single-IMU monitor shares (phase, status,
 //! fault estimate, health, updated) are read, plus the innovations of the
-//! UKF monitor's diagnostics in [`innovations`] (one place to adapt when the
+//! UKF monitor's diagnostics in `innovations` (one place to adapt when the
 //! monitors' report types are unified).
 
 use std::path::Path;
