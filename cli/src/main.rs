@@ -7,11 +7,13 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 /// `println!` that ends the program quietly when stdout is closed (e.g.
-/// piped into `head`) instead of panicking on the broken pipe.
+/// piped into `head`) instead of panicking on the broken pipe, and prints
+/// above a running progress spinner.
 macro_rules! out {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        if let Err(e) = writeln!(std::io::stdout().lock(), $($arg)*) {
+        let r = crate::cmd::progress::suspend(|| writeln!(std::io::stdout().lock(), $($arg)*));
+        if let Err(e) = r {
             if e.kind() == std::io::ErrorKind::BrokenPipe {
                 std::process::exit(0);
             }
@@ -23,7 +25,8 @@ macro_rules! out {
 macro_rules! out_nl {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        if let Err(e) = write!(std::io::stdout().lock(), $($arg)*) {
+        let r = crate::cmd::progress::suspend(|| write!(std::io::stdout().lock(), $($arg)*));
+        if let Err(e) = r {
             if e.kind() == std::io::ErrorKind::BrokenPipe {
                 std::process::exit(0);
             }
@@ -110,6 +113,12 @@ enum Cmd {
     Simulate(cmd::simulate::Args),
     /// Replay a SPEC §10 CSV through the monitor (default detector: run-time matrix + GLR).
     Replay(cmd::replay::Args),
+    /// A flight report: any log (.ulg, .bin, SPEC §10 CSV; one or three
+    /// IMUs) replayed into one self-contained HTML page that opens offline:
+    /// verdict per IMU channel, fault estimates with flags, innovations
+    /// ±3σ, parity residuals and tests with the PX4-like and ArduPilot-like
+    /// baselines, status timeline; zoom and pan over the whole log.
+    Report(cmd::report::Args),
 }
 
 /// Errors reach the user as one line on stderr (`error: what: why`, the
@@ -144,5 +153,6 @@ fn run(cmd: Cmd) -> Result<()> {
         Cmd::Detections(a) => cmd::detections::run(a),
         Cmd::Simulate(a) => cmd::simulate::run(a),
         Cmd::Replay(a) => cmd::replay::run(a),
+        Cmd::Report(a) => cmd::report::run(a),
     }
 }

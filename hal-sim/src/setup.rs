@@ -86,6 +86,12 @@ impl DetectionTally {
         }
     }
 
+    /// Each fault row with the time it was first flagged on its channel
+    /// with the right sign (`None`: not detected).
+    pub fn rows(&self) -> &[(FaultRow, Option<f64>)] {
+        &self.rows
+    }
+
     /// Records one step.
     pub fn record<T: Real>(&mut self, s: &SimSample, r: &Report<T>) {
         self.record_status(s, &r.status);

@@ -23,8 +23,9 @@ pub(crate) struct Args {
     /// Per-run rows (CSV), the input of `merge`.
     #[arg(long)]
     csv: Option<PathBuf>,
-    /// Summary (JSON).
-    #[arg(long)]
+    /// One JSON object on stdout instead of text (docs/cli-json.md); with
+    /// a FILE, the text as usual and the object written to FILE.
+    #[arg(long, num_args = 0..=1, default_missing_value = "-", value_name = "FILE")]
     json: Option<PathBuf>,
     #[command(flatten)]
     detect: DetectOpts,
@@ -51,6 +52,21 @@ pub(crate) fn run(args: Args) -> Result<()> {
     let rows = run_campaign(&scn, runs, seed, shard, &opts)?;
     let secs = started.elapsed().as_secs_f64();
     let summary = summarise(&rows)?;
+    let v = serde_json::json!({
+        "scenario": name,
+        "seed": seed,
+        "shard": shard.map(|s| format!("{}/{}", s.i, s.n)),
+        "elapsed_s": secs,
+        "threads": rayon::current_num_threads(),
+        "summary": super::json::campaign_summary(&summary),
+    });
+    if super::json::to_stdout(json.as_deref()) {
+        if let Some(p) = csv {
+            imu_fdi_cli::eval::campaign::write_rows(&p, &rows)?;
+        }
+        super::json::emit(&v);
+        return Ok(());
+    }
     out!(
         "campaign {name}, seed {seed}{}: {} runs in {secs:.1} s ({:.1} runs/s on {} threads)",
         shard.map_or(String::new(), |s| format!(", shard {}/{}", s.i, s.n)),
@@ -59,23 +75,20 @@ pub(crate) fn run(args: Args) -> Result<()> {
         rayon::current_num_threads()
     );
     out_nl!("{}", summary.table());
-    finish_campaign(&rows, &summary, csv, json)?;
+    finish_campaign(&rows, csv, json, &v)?;
     Ok(())
 }
 
 pub(crate) fn finish_campaign(
     rows: &[imu_fdi_cli::eval::campaign::CampaignRow],
-    summary: &imu_fdi_cli::eval::campaign::CampaignSummary,
     csv: Option<PathBuf>,
     json: Option<PathBuf>,
+    v: &serde_json::Value,
 ) -> Result<()> {
     if let Some(p) = csv {
         imu_fdi_cli::eval::campaign::write_rows(&p, rows)?;
         out!("wrote {} rows to {}", rows.len(), p.display());
     }
-    if let Some(p) = json {
-        std::fs::write(&p, serde_json::to_string_pretty(summary)?)?;
-        out!("wrote summary to {}", p.display());
-    }
+    super::json::write(&json, v)?;
     Ok(())
 }

@@ -17,6 +17,9 @@ pub(crate) struct Args {
     /// Attitude CSV of a CSV extract (time_s, q_w… or roll_deg…).
     #[arg(long)]
     att: Option<PathBuf>,
+    /// One JSON object on stdout instead of text (docs/cli-json.md).
+    #[arg(long)]
+    json: bool,
 }
 
 /// Runs `convert`.
@@ -26,6 +29,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         out,
         gnss,
         att,
+        json,
     } = args;
     let c = imu_fdi_cli::io::log_import::any_to_replay_csv(
         &input,
@@ -33,6 +37,24 @@ pub(crate) fn run(args: Args) -> Result<()> {
         att.as_deref(),
         &out,
     )?;
+    if let Some(why) = &c.ended_early {
+        eprintln!("warning: {why}");
+    }
+    if json {
+        super::json::emit(&serde_json::json!({
+            "input": input.display().to_string(),
+            "output": out.display().to_string(),
+            "rows": c.rows,
+            "imus": c.imu_instances,
+            "start_s": c.span.0,
+            "end_s": c.span.1,
+            "imu_rate_hz": c.imu_rate_hz,
+            "gnss_rows": c.gnss_rows,
+            "attitude_rows": c.att_rows,
+            "ended_early": c.ended_early,
+        }));
+        return Ok(());
+    }
     out!(
             "converted {}: {} rows of {} IMU(s), t = {:.2}..{:.2} s ({:.1} Hz), {} rows with GNSS velocity, {} with attitude",
             input.display(),
@@ -45,8 +67,5 @@ pub(crate) fn run(args: Args) -> Result<()> {
             c.att_rows
         );
     out!("wrote {}", out.display());
-    if let Some(why) = &c.ended_early {
-        eprintln!("warning: {why}");
-    }
     Ok(())
 }

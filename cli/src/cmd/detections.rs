@@ -18,6 +18,9 @@ pub(crate) struct Args {
     /// reading the emulated chip, into the periodic Monitor task.
     #[arg(long)]
     via_chip: bool,
+    /// One JSON object on stdout instead of text (docs/cli-json.md).
+    #[arg(long)]
+    json: bool,
 }
 
 /// Runs `detections`.
@@ -26,12 +29,13 @@ pub(crate) fn run(args: Args) -> Result<()> {
         name,
         seed,
         via_chip,
+        json,
     } = args;
     if via_chip {
         let scn = scenario(&name)?;
         let tally = hal_sim::setup::run_via_chip(&scn, seed, |step| step())
             .ok_or_else(|| anyhow!("the driver or the monitor refused to start"))?;
-        tally.print(|line| out!("{line}"));
+        print_tally(&tally, &name, seed, json);
         return Ok(());
     }
     let scn = scenario(&name)?;
@@ -60,6 +64,33 @@ pub(crate) fn run(args: Args) -> Result<()> {
         );
         tally.record(&s, &r);
     }
-    tally.print(|line| out!("{line}"));
+    print_tally(&tally, &name, seed, json);
     Ok(())
+}
+
+/// The tally as text (the lines the QEMU image prints, diffed by CI) or
+/// as one JSON object.
+fn print_tally(tally: &hal_sim::setup::DetectionTally, name: &str, seed: u64, json: bool) {
+    if !json {
+        tally.print(|line| out!("{line}"));
+        return;
+    }
+    let faults: Vec<serde_json::Value> = tally
+        .rows()
+        .iter()
+        .map(|(row, first)| {
+            serde_json::json!({
+                "channel": imu_fdi::model::CHANNEL_NAMES.get(row.channel).copied().unwrap_or("?"),
+                "start_s": row.start,
+                "end_s": row.end,
+                "detected_s": first,
+                "delay_s": first.map(|t| t - row.start),
+            })
+        })
+        .collect();
+    super::json::emit(&serde_json::json!({
+        "scenario": name,
+        "seed": seed,
+        "faults": faults,
+    }));
 }

@@ -14,11 +14,15 @@ use super::{options, DetectOpts, StatisticArg};
 pub(crate) struct Args {
     #[arg(long, default_value = "docs/gallery")]
     out: PathBuf,
+    /// One JSON object on stdout instead of text (docs/cli-json.md).
+    #[arg(long)]
+    json: bool,
 }
 
 /// Runs `gallery`.
 pub(crate) fn run(args: Args) -> Result<()> {
-    let Args { out } = args;
+    let _progress = super::progress::spinner("gallery");
+    let Args { out, json } = args;
     use imu_fdi_cli::plot::TraceFigure as F;
     std::fs::create_dir_all(&out)?;
     let mut files = Vec::new();
@@ -38,6 +42,10 @@ pub(crate) fn run(args: Args) -> Result<()> {
         files.extend(plot_scenario(name, 1, &out, &opts, Some(&figs))?);
     }
     files.extend(plot_scenario("s4", 1, &out, &RunOptions::default(), None)?);
+    if json {
+        super::json::emit(&serde_json::json!({ "files": super::json::files(&files) }));
+        return Ok(());
+    }
     out!("gallery: wrote {} files to {}", files.len(), out.display());
     for f in files {
         out!("  {}", f.display());

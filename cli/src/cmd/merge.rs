@@ -14,7 +14,9 @@ pub(crate) struct Args {
     inputs: Vec<PathBuf>,
     #[arg(long)]
     csv: Option<PathBuf>,
-    #[arg(long)]
+    /// One JSON object on stdout instead of text (docs/cli-json.md); with
+    /// a FILE, the text as usual and the object written to FILE.
+    #[arg(long, num_args = 0..=1, default_missing_value = "-", value_name = "FILE")]
     json: Option<PathBuf>,
 }
 
@@ -24,8 +26,19 @@ pub(crate) fn run(args: Args) -> Result<()> {
     use imu_fdi_cli::eval::campaign::{merge_files, summarise};
     let rows = merge_files(&inputs)?;
     let summary = summarise(&rows)?;
+    let v = serde_json::json!({
+        "files": super::json::files(&inputs),
+        "summary": super::json::campaign_summary(&summary),
+    });
+    if super::json::to_stdout(json.as_deref()) {
+        if let Some(p) = csv {
+            imu_fdi_cli::eval::campaign::write_rows(&p, &rows)?;
+        }
+        super::json::emit(&v);
+        return Ok(());
+    }
     out!("merged {} files: {} runs", inputs.len(), rows.len());
     out_nl!("{}", summary.table());
-    finish_campaign(&rows, &summary, csv, json)?;
+    finish_campaign(&rows, csv, json, &v)?;
     Ok(())
 }

@@ -14,6 +14,7 @@ pub(crate) mod convert;
 pub(crate) mod demo;
 pub(crate) mod detections;
 pub(crate) mod gallery;
+pub(crate) mod json;
 pub(crate) mod merge;
 pub(crate) mod otsukf;
 pub(crate) mod parity;
@@ -22,7 +23,9 @@ pub(crate) mod parity_replay;
 pub(crate) mod parity_sweep;
 pub(crate) mod parity_table;
 pub(crate) mod plot;
+pub(crate) mod progress;
 pub(crate) mod replay;
+pub(crate) mod report;
 pub(crate) mod scenario;
 pub(crate) mod simulate;
 pub(crate) mod sweep;
@@ -113,6 +116,26 @@ pub(crate) fn campaign(
     Ok(total)
 }
 
+/// The `--detector` name of a decision rule (text and JSON output).
+pub(crate) fn detector_name(d: Detector) -> &'static str {
+    match d {
+        Detector::Threshold => "threshold",
+        Detector::PaperMatrix => "paper",
+        Detector::PaperMatrixAsPrinted => "paper-as-printed",
+        Detector::RuntimeMatrix => "runtime",
+        Detector::RuntimeMatrixGlr => "runtime-glr",
+    }
+}
+
+/// The `--statistic` name of a t-test statistic.
+pub(crate) fn statistic_name(s: Statistic) -> &'static str {
+    match s {
+        Statistic::Raw => "raw",
+        Statistic::Whitened => "whitened",
+        Statistic::Normalized => "normalized",
+    }
+}
+
 pub(crate) fn scenario(name: &str) -> Result<Scenario> {
     imu_fdi_cli::io::scenario_file::load_scenario(name)
 }
@@ -123,15 +146,19 @@ pub(crate) fn print_run(
     first: u64,
     seeds: u64,
     opts: &RunOptions,
+    text: bool,
 ) -> Result<RunMetrics> {
     let m = campaign(scn, first, seeds, opts)?;
+    if !text {
+        return Ok(m);
+    }
     out!(
-        "== {title}: {} seeds {}..{}, detector {:?}, statistic {:?}, α = {:e} (f32 monitor)",
+        "== {title}: {} seeds {}..{}, detector {}, statistic {}, α = {:e} (f32 monitor)",
         scn.name,
         first,
         first + seeds - 1,
-        opts.detector,
-        opts.statistic,
+        detector_name(opts.detector),
+        statistic_name(opts.statistic),
         opts.alpha
     );
     out_nl!("{}", m.table());

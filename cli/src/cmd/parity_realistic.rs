@@ -23,10 +23,14 @@ pub(crate) struct Args {
     /// velocity, as a FIFO driver hands them) instead of point-sampled.
     #[arg(long)]
     integrated: bool,
+    /// One JSON object on stdout instead of text (docs/cli-json.md).
+    #[arg(long)]
+    json: bool,
 }
 
 /// Runs `parity-realistic`.
 pub(crate) fn run(a: Args) -> Result<()> {
+    let _progress = super::progress::spinner("parity-realistic: simulated flights");
     let kinds: &[ArrayKind] = match a.kind.as_str() {
         "gyro" => &[ArrayKind::Gyro],
         "accel" => &[ArrayKind::Accel],
@@ -38,15 +42,24 @@ pub(crate) fn run(a: Args) -> Result<()> {
     } else {
         RealisticProfile::log171()
     };
+    let mut kinds_json = Vec::new();
     for &kind in kinds {
         let ff = fault_free_on(&profile, kind, a.hours, 1000)?;
-        out!(
-            "{kind:?}: {:.2} h fault-free: {} alarm events ({:.2}/h), {} sensors isolated",
-            ff.hours,
-            ff.alarm_events,
-            ff.alarm_events as f64 / ff.hours.max(1e-9),
-            ff.isolations
-        );
+        let mut steps_json = Vec::new();
+        if !a.json {
+            out!(
+                "{}: {:.2} h fault-free: {} alarm events ({:.2}/h), {} sensors isolated",
+                if kind == ArrayKind::Gyro {
+                    "gyro"
+                } else {
+                    "accel"
+                },
+                ff.hours,
+                ff.alarm_events,
+                ff.alarm_events as f64 / ff.hours.max(1e-9),
+                ff.isolations
+            );
+        }
         let (unit, sizes): (&str, &[f64]) = match kind {
             ArrayKind::Gyro => ("°/s", &[0.5, 1.0, 2.0, 3.0]),
             ArrayKind::Accel => ("m/s²", &[0.1, 0.2, 0.3, 0.5]),
@@ -58,6 +71,16 @@ pub(crate) fn run(a: Args) -> Result<()> {
             };
             let r = steps_on(&profile, kind, si, a.rounds, 1)?;
             let med = r.delays.get(r.delays.len() / 2).copied();
+            steps_json.push(serde_json::json!({
+                format!("size_{}", if unit == "°/s" { "deg_s" } else { "m_s2" }): s,
+                "isolated": r.isolated,
+                "cases": r.cases,
+                "flights_with_false_alarm": r.false_alarms,
+                "median_delay_s": med,
+            }));
+            if a.json {
+                continue;
+            }
             out!(
                 "  step {s} {unit}: {}/{} isolated within 10 s, {} flights with a false alarm, median delay {}",
                 r.isolated,
@@ -66,6 +89,18 @@ pub(crate) fn run(a: Args) -> Result<()> {
                 med.map_or("-".into(), |d| format!("{d:.1} s"))
             );
         }
+        kinds_json.push(serde_json::json!({
+            "kind": if kind == ArrayKind::Gyro { "gyro" } else { "accel" },
+            "integrated": a.integrated,
+            "fault_free_h": ff.hours,
+            "fault_free_alarm_events": ff.alarm_events,
+            "fault_free_alarms_per_hour": ff.alarm_events as f64 / ff.hours.max(1e-9),
+            "fault_free_isolations": ff.isolations,
+            "steps": steps_json,
+        }));
+    }
+    if a.json {
+        super::json::emit(&serde_json::json!({ "kinds": kinds_json }));
     }
     Ok(())
 }

@@ -149,7 +149,12 @@ pub(crate) fn parity_replay_cmd(
     for kind in [ArrayKind::Gyro, ArrayKind::Accel] {
         let inj = inj.filter(|i| (i.channel >= 3) == (kind == ArrayKind::Gyro));
         let r = replay_parity_with(&log, kind, train_start, train_s, inj, method)?;
-        out!("{kind:?} (sensor = 3 x IMU + axis):");
+        let kind_name = if kind == ArrayKind::Gyro {
+            "gyro"
+        } else {
+            "accel"
+        };
+        out!("{kind_name} (sensor = 3 x IMU + axis):");
         if method == imu_fdi_cli::eval::parity_replay::ParityMethod::GltCusum {
             out!(
                 "  monitoring from {:.2} s; threshold factors from calibration [GLT, PCA, CUSUM] = [{:.2}, {:.2}, {:.2}]; correlation factor {:.2}",
@@ -184,7 +189,12 @@ pub(crate) fn parity_replay_cmd(
         let st: Vec<String> = r
             .statuses
             .iter()
-            .map(|(k, s, t)| format!("{k}:{s:?}@{t:.2}"))
+            .map(|(k, s, t)| {
+                format!(
+                    "sensor {k} {} at {t:.2} s",
+                    imu_fdi_cli::report::parity::status_text(*s)
+                )
+            })
             .collect();
         out!(
             "  statuses: {}",

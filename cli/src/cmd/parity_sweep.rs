@@ -21,8 +21,9 @@ pub(crate) struct Args {
     hours: u32,
     #[arg(long, default_value_t = 1)]
     first_seed: u64,
-    /// Also write the full per-size results as JSON.
-    #[arg(long)]
+    /// One JSON object on stdout instead of text (docs/cli-json.md); with
+    /// a FILE, the text as usual and the object written to FILE.
+    #[arg(long, num_args = 0..=1, default_missing_value = "-", value_name = "FILE")]
     json: Option<PathBuf>,
 }
 
@@ -108,19 +109,52 @@ pub(crate) fn parity_sweep<const N: usize>(
         return Err(anyhow!("--runs must be at least 1"));
     }
     let started = std::time::Instant::now();
+    let _progress = super::progress::spinner("parity-sweep");
     let sizes = default_sizes(spec.kind);
     let result = sweep(spec, &sizes, runs, hours, first_seed)?;
+    let unit = match spec.kind {
+        hal_sim::array::ArrayKind::Gyro => "rad_s",
+        hal_sim::array::ArrayKind::Accel => "m_s2",
+    };
+    let methods: Vec<serde_json::Value> = result
+        .iter()
+        .map(|m| {
+            serde_json::json!({
+                "method": m.method,
+                "false_alarm_events": m.false_alarms,
+                format!("min_detected_{unit}"): m.min_detected().map(|s| s.size),
+                "sizes": m.sizes.iter().map(|s| serde_json::json!({
+                    format!("size_{unit}"): s.size,
+                    "detected": s.detected,
+                    "runs": s.runs,
+                    "mean_delay_s": s.mean_delay,
+                    "max_delay_s": s.max_delay,
+                    "correct_blame": s.correct_blame,
+                })).collect::<Vec<_>>(),
+            })
+        })
+        .collect();
+    let v = serde_json::json!({
+        "array": spec.name,
+        "kind": if unit == "rad_s" { "gyro" } else { "accel" },
+        "runs": runs,
+        "fault_free_h": hours,
+        "first_seed": first_seed,
+        "elapsed_s": started.elapsed().as_secs_f64(),
+        "methods": methods,
+    });
+    if super::json::to_stdout(json.as_deref()) {
+        super::json::emit(&v);
+        return Ok(());
+    }
     out!(
-        "{} {:?} array, {} sizes x {runs} runs, {hours} fault-free h ({:.1} s):",
+        "{} {} array, {} sizes x {runs} runs, {hours} fault-free h ({:.1} s):",
         spec.name,
-        spec.kind,
+        if unit == "rad_s" { "gyro" } else { "accel" },
         sizes.len(),
         started.elapsed().as_secs_f64()
     );
     out_nl!("{}", format_sweep(spec.kind, &result, runs, hours));
-    if let Some(p) = json {
-        std::fs::write(&p, serde_json::to_string_pretty(&result)?)?;
-        out!("wrote {}", p.display());
-    }
+    super::json::write(&json, &v)?;
     Ok(())
 }

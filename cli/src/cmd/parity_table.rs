@@ -38,10 +38,14 @@ pub(crate) struct Args {
     /// power-up), isolated within 10 s of monitoring start.
     #[arg(long)]
     power_up: bool,
+    /// One JSON object on stdout instead of text (docs/cli-json.md).
+    #[arg(long)]
+    json: bool,
 }
 
 /// Runs `parity-table`.
 pub(crate) fn run(a: Args) -> Result<()> {
+    let _progress = super::progress::spinner("parity-table: replaying the log per case");
     let kind = match a.kind.as_str() {
         "gyro" => ArrayKind::Gyro,
         "accel" => ArrayKind::Accel,
@@ -58,13 +62,54 @@ pub(crate) fn run(a: Args) -> Result<()> {
     for w in &log.warnings {
         eprintln!("warning: {w}");
     }
+    // Sizes in the unit the user gave (°/s or m/s²).
+    let (unit, scale) = match kind {
+        ArrayKind::Gyro => ("deg_s", 180.0 / std::f64::consts::PI),
+        ArrayKind::Accel => ("m_s2", 1.0),
+    };
+    let inj = |i: &imu_fdi_cli::eval::parity_replay::Injection| {
+        serde_json::json!({
+            "imu": i.imu,
+            "channel": imu_fdi::model::CHANNEL_NAMES.get(i.channel).copied().unwrap_or("?"),
+            format!("size_{unit}"): i.size * scale,
+            "onset_s": i.start,
+            "end_s": i.end.is_finite().then_some(i.end),
+        })
+    };
+    let kind_name = if kind == ArrayKind::Gyro {
+        "gyro"
+    } else {
+        "accel"
+    };
     if a.power_up {
         let cases = power_up_table(&log, kind, size, &a.train_starts, a.train_s, a.end)?;
         let ok = cases.iter().filter(|c| c.delay.is_some()).count();
         let wrong = cases.iter().filter(|c| c.wrong_isolation).count();
+        if a.json {
+            let rows: Vec<serde_json::Value> = cases
+                .iter()
+                .map(|c| {
+                    serde_json::json!({
+                        "train_start_s": c.train_start,
+                        "injection": inj(&c.injection),
+                        "delay_s": c.delay,
+                        "wrong_isolation": c.wrong_isolation,
+                    })
+                })
+                .collect();
+            super::json::emit(&serde_json::json!({
+                "kind": kind_name,
+                "power_up": true,
+                "isolated": ok,
+                "wrong_isolations": wrong,
+                "cases": rows,
+            }));
+            return Ok(());
+        }
         out!(
-            "{kind:?} bias {} from power-up: {ok}/{} isolated within 10 s of monitoring start; {wrong} cases named a healthy sensor",
+            "{kind_name} bias {} {} from power-up: {ok}/{} isolated within 10 s of monitoring start; {wrong} cases named a healthy sensor",
             a.size,
+            if kind == ArrayKind::Gyro { "°/s" } else { "m/s²" },
             cases.len()
         );
         return Ok(());
@@ -79,6 +124,28 @@ pub(crate) fn run(a: Args) -> Result<()> {
         a.duration,
         a.end,
     )?;
+    if a.json {
+        let rows: Vec<serde_json::Value> = cases
+            .iter()
+            .map(|c| {
+                serde_json::json!({
+                    "train_start_s": c.train_start,
+                    "injection": inj(&c.injection),
+                    "isolated": c.isolated,
+                    "delay_s": c.delay,
+                    "false_alarm": c.false_alarm,
+                })
+            })
+            .collect();
+        super::json::emit(&serde_json::json!({
+            "kind": kind_name,
+            "power_up": false,
+            "isolated": cases.iter().filter(|c| c.isolated).count(),
+            "false_alarms": cases.iter().filter(|c| c.false_alarm).count(),
+            "cases": rows,
+        }));
+        return Ok(());
+    }
     out!(
         "{}",
         format_step_table(kind, size, &cases, a.end).trim_end()

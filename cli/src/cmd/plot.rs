@@ -18,6 +18,9 @@ pub(crate) struct Args {
     out: PathBuf,
     #[command(flatten)]
     detect: DetectOpts,
+    /// One JSON object on stdout instead of text (docs/cli-json.md).
+    #[arg(long)]
+    json: bool,
 }
 
 /// Runs `plot`.
@@ -27,9 +30,18 @@ pub(crate) fn run(args: Args) -> Result<()> {
         seed,
         out,
         detect,
+        json,
     } = args;
     std::fs::create_dir_all(&out)?;
     let files = plot_scenario(&name, seed, &out, &options(&name, &detect), None)?;
+    if json {
+        super::json::emit(&serde_json::json!({
+            "scenario": name,
+            "seed": seed,
+            "files": super::json::files(&files),
+        }));
+        return Ok(());
+    }
     out!("wrote {} files to {}:", files.len(), out.display());
     for f in files {
         out!("  {}", f.display());

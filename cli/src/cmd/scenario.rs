@@ -23,8 +23,9 @@ pub(crate) struct Args {
     seeds: u64,
     #[command(flatten)]
     detect: DetectOpts,
-    /// Also write the metrics as JSON here.
-    #[arg(long)]
+    /// One JSON object on stdout instead of text (docs/cli-json.md); with
+    /// a FILE, the text as usual and the object written to FILE.
+    #[arg(long, num_args = 0..=1, default_missing_value = "-", value_name = "FILE")]
     json: Option<PathBuf>,
     /// Write the first seed's per-sample trace as CSV here.
     #[arg(long)]
@@ -43,7 +44,15 @@ pub(crate) fn run(args: Args) -> Result<()> {
     } = args;
     // S4 is the redundant-sensor scenario: the parity monitor's run.
     if name.eq_ignore_ascii_case("s4") {
-        return parity_s4(seed, seeds.max(1));
+        if json
+            .as_ref()
+            .is_some_and(|p| !super::json::to_stdout(Some(p)))
+        {
+            return Err(anyhow!(
+                "--json FILE: s4 prints its JSON on stdout (`--json` alone)"
+            ));
+        }
+        return parity_s4(seed, seeds.max(1), json.is_some());
     }
     if name.eq_ignore_ascii_case("s6") {
         return Err(anyhow!(
@@ -51,6 +60,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
                  for the UKF monitor, `parity-replay` for redundant IMUs (see README, Real flight logs)"
             ));
     }
+    let _progress = super::progress::spinner("scenario");
     let scn = scenario(&name)?;
     let opts = options(&name, &detect);
     if let Some(p) = trace {
@@ -59,14 +69,21 @@ pub(crate) fn run(args: Args) -> Result<()> {
         t.write_csv(&p)?;
         out!("wrote trace of seed {seed} to {}", p.display());
     }
-    let m = print_run("scenario", &scn, seed, seeds.max(1), &opts)?;
-    if scn.faults.iter().any(|r| r.is_hardware()) {
+    let text = !super::json::to_stdout(json.as_deref());
+    let m = print_run("scenario", &scn, seed, seeds.max(1), &opts, text)?;
+    if text && scn.faults.iter().any(|r| r.is_hardware()) {
         print_hardware(&scn, seed, seeds.max(1), &opts)?;
     }
-    if let Some(p) = json {
-        std::fs::write(&p, serde_json::to_string_pretty(&m)?)?;
-        out!("wrote {}", p.display());
-    }
+    let v = serde_json::json!({
+        "scenario": scn.name.as_str(),
+        "first_seed": seed,
+        "seeds": seeds.max(1),
+        "detector": super::detector_name(opts.detector),
+        "statistic": super::statistic_name(opts.statistic),
+        "alpha_fraction": opts.alpha,
+        "metrics": super::json::metrics(&m),
+    });
+    super::json::write(&json, &v)?;
     Ok(())
 }
 

@@ -18,13 +18,30 @@ pub(crate) struct Args {
     /// Output CSV.
     #[arg(long)]
     out: PathBuf,
+    /// One JSON object on stdout instead of text (docs/cli-json.md).
+    #[arg(long)]
+    json: bool,
 }
 
 /// Runs `simulate`.
 pub(crate) fn run(args: Args) -> Result<()> {
-    let Args { name, seed, out } = args;
+    let Args {
+        name,
+        seed,
+        out,
+        json,
+    } = args;
     let scn = scenario(&name)?;
     let n = imu_fdi_cli::eval::replay::write_simulated(&scn, seed, &out)?;
+    if json {
+        super::json::emit(&serde_json::json!({
+            "scenario": scn.name.as_str(),
+            "seed": seed,
+            "rows": n,
+            "output": out.display().to_string(),
+        }));
+        return Ok(());
+    }
     out!(
         "wrote {n} rows of {} (seed {seed}) to {}",
         scn.name,

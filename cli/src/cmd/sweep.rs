@@ -18,26 +18,39 @@ pub(crate) struct Args {
     seeds: u64,
     #[command(flatten)]
     detect: DetectOpts,
+    /// One JSON object on stdout instead of text (docs/cli-json.md).
+    #[arg(long)]
+    json: bool,
 }
 
 /// Runs `sweep`.
 pub(crate) fn run(args: Args) -> Result<()> {
+    let _progress = super::progress::spinner("sweep");
     let Args {
         name,
         factors,
         seeds,
         detect,
+        json,
     } = args;
     let base = scenario(&name)?;
     let opts = options(&name, &detect);
-    out!(
-        "sweep of {}: fault sizes × factor, {} seeds each, detector {:?}, statistic {:?}",
+    macro_rules! text {
+        ($($a:tt)*) => {
+            if !json {
+                out!($($a)*);
+            }
+        };
+    }
+    let mut rows = Vec::new();
+    text!(
+        "sweep of {}: fault sizes × factor, {} seeds each, detector {}, statistic {}",
         base.name,
         seeds,
-        opts.detector,
-        opts.statistic
+        super::detector_name(opts.detector),
+        super::statistic_name(opts.statistic)
     );
-    out!(
+    text!(
         "{:>7}  {:>20}  {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}  {:>9} {:>8}",
         "factor",
         "sizes a,b,c (acc)",
@@ -75,7 +88,19 @@ pub(crate) fn run(args: Args) -> Result<()> {
             .filter_map(|c| c.wrong_channel_rate())
             .fold(0.0, f64::max);
         let a = scn.sizes.accel;
-        out!(
+        let g = scn.sizes.gyro;
+        rows.push(serde_json::json!({
+            "scale_factor": f,
+            "accel_a_m_s2": a[0],
+            "accel_b_m_s3": a[1],
+            "accel_c_m_s2": a[2],
+            "gyro_a_rad_s": g[0],
+            "gyro_b_rad_s2": g[1],
+            "gyro_c_rad_s": g[2],
+            "max_wrong_channel_fraction": wrong,
+            "metrics": super::json::metrics(&m),
+        }));
+        text!(
             "{:>7}  {:>20}  {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}  {:>8.2}% {:>8}",
             f,
             format!("{:.3},{:.3},{:.2}", a[0], a[1], a[2]),
@@ -88,6 +113,16 @@ pub(crate) fn run(args: Args) -> Result<()> {
             100.0 * wrong,
             m.false_alarm_events
         );
+    }
+    if json {
+        super::json::emit(&serde_json::json!({
+            "scenario": base.name.as_str(),
+            "seeds": seeds.max(1),
+            "detector": super::detector_name(opts.detector),
+            "statistic": super::statistic_name(opts.statistic),
+            "factors": rows,
+        }));
+        return Ok(());
     }
     out!("detection rate counted where |fault| ≥ the scenario's minimum (0.1 m/s², 0.5 °/s) from L after it is reached");
     Ok(())

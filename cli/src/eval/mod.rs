@@ -10,6 +10,7 @@ pub mod array_sweep;
 pub mod campaign;
 pub mod inject;
 pub mod parity_campaign;
+pub mod parity_injection;
 pub mod parity_replay;
 pub mod parity_tables;
 pub mod replay;

@@ -190,6 +190,19 @@ pub fn replay(
     sim_cfg: impl Fn(AidingKind) -> UkfMonitorConfig<f64>,
     opts: &ReplayOptions,
 ) -> Result<ReplaySummary> {
+    replay_observed(input, out, summary, sim_cfg, opts, &mut |_, _| {})
+}
+
+/// [`replay`], calling `observe(t, reports)` after every row with the
+/// report of each IMU's monitor (the flight report plots these).
+pub fn replay_observed(
+    input: &Path,
+    out: Option<&Path>,
+    summary: Option<&Path>,
+    sim_cfg: impl Fn(AidingKind) -> UkfMonitorConfig<f64>,
+    opts: &ReplayOptions,
+    observe: &mut dyn FnMut(f64, &[imu_fdi::monitor::Report<f64>]),
+) -> Result<ReplaySummary> {
     let (mut rdr, headers) = crate::io::log_import::open_csv(input)?;
     let col: HashMap<&str, usize> = headers.iter().enumerate().map(|(i, h)| (h, i)).collect();
     let find = |name: &str| col.get(name).copied();
@@ -464,6 +477,7 @@ pub fn replay(
                     .and_then(|s| s.sign())
                     .is_some_and(|f| f != 0)
         };
+        observe(t, &reports);
         // The same channel flagged on every IMU at once is the aiding or the
         // model, not an IMU (SPEC §8b: gate and attribute).
         let common: [bool; 6] =
