@@ -92,7 +92,7 @@ enum Cmd {
     /// Smallest bias each method detects in >= 99 % of runs at zero false
     /// alarms over fault-free hours, with its delay (redundant arrays).
     ParitySweep(cmd::parity_sweep::Args),
-    /// The optimal two-stage UKF on S3 (s3: realistic sensors; s3-paper: the
+    /// The optimal two-stage UKF (OTSUKF) on S3 (s3: realistic sensors; s3-paper: the
     /// paper's noise, aiding at the IMU rate): SPEC §9 RMSE over seeds, beside
     /// the 12-state augmented UKF and the paper's numbers.
     Otsukf(cmd::otsukf::Args),
