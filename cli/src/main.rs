@@ -108,7 +108,10 @@ enum Cmd {
     Detections(cmd::detections::Args),
     /// Write a simulated run in the SPEC §10 replay format (with truth columns).
     Simulate(cmd::simulate::Args),
-    /// Replay a SPEC §10 CSV through the monitor (default detector: run-time matrix + GLR).
+    /// Replay a SPEC §10 CSV, a ULog or a DataFlash log through a single-IMU
+    /// monitor (`--monitor ukf`: UKF innovation monitor, default detector
+    /// run-time matrix + GLR; `--monitor otsukf`: the OTSUKF), one output
+    /// format for both.
     Replay(cmd::replay::Args),
 }
 

@@ -64,7 +64,7 @@ fn simulate_then_replay_round_trip_detects_s2_faults() {
     }
     let text = std::fs::read_to_string(&out).unwrap();
     let header = text.lines().next().unwrap();
-    assert!(header.starts_with("t,x_u,x_v,x_w,x_roll,x_pitch,x_yaw,flag_ax"));
+    assert!(header.starts_with("t,x_u,x_v,x_w,x_roll,x_pitch,x_yaw,phase,flag_ax"));
     assert_eq!(text.lines().count(), 6501);
 }
 

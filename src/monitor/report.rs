@@ -176,6 +176,23 @@ impl<T: Real, X: Default> Default for Report<T, X> {
 }
 
 impl<T, X> Report<T, X> {
+    /// The same report with its monitor-specific part mapped by `f`: how a
+    /// tool that handles either monitor brings both to one type.
+    pub fn map_detail<Y>(self, f: impl FnOnce(X) -> Y) -> Report<T, Y> {
+        Report {
+            phase: self.phase,
+            status: self.status,
+            fault_estimate: self.fault_estimate,
+            nominal_bias: self.nominal_bias,
+            corrected_imu: self.corrected_imu,
+            state: self.state,
+            state_sigma: self.state_sigma,
+            health: self.health,
+            updated: self.updated,
+            detail: f(self.detail),
+        }
+    }
+
     /// True when any channel is reported faulty.
     pub fn any_fault(&self) -> bool {
         self.status

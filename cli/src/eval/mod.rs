@@ -13,4 +13,6 @@ pub mod parity_campaign;
 pub mod parity_replay;
 pub mod parity_tables;
 pub mod replay;
+pub mod replay_monitor;
+mod replay_sim;
 pub mod stats_ci;

@@ -5,17 +5,18 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 use imu_fdi::model::{AidingKind, ImuVec, MeasVec, Measurement, CHANNEL_NAMES};
-use imu_fdi::monitor::{Phase, UkfMonitor, UkfMonitorConfig};
+use imu_fdi::monitor::{Phase, UkfMonitorConfig};
 
-use hal_sim::scenario::Scenario;
-use hal_sim::sim::Simulator;
+use super::replay_monitor::{phase_name, MonitorKind, ReplayMonitor};
 
-const IMU_COLS: [&str; 6] = [
+pub use super::replay_sim::write_simulated;
+
+pub(crate) const IMU_COLS: [&str; 6] = [
     "imu0_ax", "imu0_ay", "imu0_az", "imu0_gx", "imu0_gy", "imu0_gz",
 ];
-const DVL_COLS: [&str; 3] = ["dvl_u", "dvl_v", "dvl_w"];
-const GNSS_COLS: [&str; 3] = ["gnss_vn", "gnss_ve", "gnss_vd"];
-const ATT_COLS: [&str; 3] = ["att_roll", "att_pitch", "att_yaw"];
+pub(crate) const DVL_COLS: [&str; 3] = ["dvl_u", "dvl_v", "dvl_w"];
+pub(crate) const GNSS_COLS: [&str; 3] = ["gnss_vn", "gnss_ve", "gnss_vd"];
+pub(crate) const ATT_COLS: [&str; 3] = ["att_roll", "att_pitch", "att_yaw"];
 
 /// Per-channel summary of a replay.
 #[derive(Debug, Clone, Default, serde::Serialize)]
@@ -38,11 +39,22 @@ pub struct ChannelSummary {
     pub false_alarm_samples: Option<usize>,
     /// With truth: time of the first flag with the right sign during a fault, s.
     pub first_correct_s: Option<f64>,
+    /// With truth: RMS error of the fault estimate over this channel's
+    /// fault-active monitored samples (SPEC §9), SI units: m/s² for the
+    /// accelerometer channels, rad/s for the gyro channels.
+    pub fault_rmse_si: Option<f64>,
+    /// Samples behind `fault_rmse_si`.
+    #[serde(skip)]
+    pub fault_rmse_n: usize,
+    #[serde(skip)]
+    fault_sq_sum: f64,
 }
 
 /// What a replay did.
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct ReplaySummary {
+    /// The monitor replayed (`ukf` or `otsukf`).
+    pub monitor: MonitorKind,
     /// Input rows read.
     pub rows: usize,
     /// Rows skipped (non-increasing or missing time, unparsable values).
@@ -114,6 +126,8 @@ pub struct ReplayOptions {
     pub vel_sigma: f64,
     /// Flight profile: attitude σ (roll, pitch, yaw), rad.
     pub att_sigma: [f64; 3],
+    /// The monitor to run on every IMU.
+    pub monitor: MonitorKind,
 }
 
 impl Default for ReplayOptions {
@@ -129,6 +143,7 @@ impl Default for ReplayOptions {
             learn_s: None,
             vel_sigma: 0.3,
             att_sigma: [1.0 * deg, 1.0 * deg, 10.0 * deg],
+            monitor: MonitorKind::Ukf,
         }
     }
 }
@@ -232,6 +247,7 @@ pub fn replay(
     let file_truth = truth_idx.iter().any(Option::is_some);
 
     let mut sum = ReplaySummary {
+        monitor: opts.monitor,
         aiding: format!("{kind:?}"),
         ..Default::default()
     };
@@ -391,10 +407,7 @@ pub fn replay(
             sum.process_noise_psd = cfg.process_noise.psd.iter().copied().collect();
             sum.meas_sigma = cfg.meas_sigma.iter().copied().collect();
         }
-        monitors.push(
-            UkfMonitor::<f64>::new(cfg)
-                .map_err(|e| anyhow::anyhow!("invalid monitor configuration: {e:?}"))?,
-        );
+        monitors.push(ReplayMonitor::new(opts.monitor, cfg)?);
     }
     let has_truth: Vec<bool> = (0..imu_idx.len())
         .map(|k| {
@@ -427,12 +440,14 @@ pub fn replay(
         for s in ["x_u", "x_v", "x_w", "x_roll", "x_pitch", "x_yaw"] {
             h.push(s.into());
         }
+        // One layout for both monitors: `fsig_*` (the fault estimate's σ)
+        // is empty where the monitor does not estimate it (UKF monitor).
         for k in 0..imu_idx.len() {
-            for c in CHANNEL_NAMES {
-                h.push(channel_name(k, &format!("flag_{c}")));
-            }
-            for c in CHANNEL_NAMES {
-                h.push(channel_name(k, &format!("fhat_{c}")));
+            h.push(channel_name(k, "phase"));
+            for prefix in ["flag", "fhat", "fsig"] {
+                for c in CHANNEL_NAMES {
+                    h.push(channel_name(k, &format!("{prefix}_{c}")));
+                }
             }
         }
         w.write_record(&h)?;
@@ -457,7 +472,7 @@ pub fn replay(
                 m.step(&imu, step_dt, &meas)
             })
             .collect();
-        let raised = |r: &imu_fdi::monitor::Report<f64>, i: usize| {
+        let raised = |r: &imu_fdi::monitor::Report<f64, _>, i: usize| {
             r.phase == Phase::Monitoring
                 && r.status
                     .get(i)
@@ -506,6 +521,11 @@ pub fn replay(
                             f == if fv > 0.0 { 1 } else { -1 }
                         };
                         *ch.correct_samples.get_or_insert(0) += usize::from(correct);
+                        if r.phase == Phase::Monitoring && fv.is_finite() {
+                            let e = r.fault_estimate.get(i).copied().unwrap_or(0.0) - fv;
+                            ch.fault_sq_sum += e * e;
+                            ch.fault_rmse_n += 1;
+                        }
                         if correct {
                             ch.first_correct_s.get_or_insert(t);
                         }
@@ -514,22 +534,32 @@ pub fn replay(
                     }
                 }
             }
-            cells.push((r.status, r.fault_estimate));
+            cells.push((r.phase, r.status, r.fault_estimate, r.detail.fault_sigma));
         }
         if let Some(w) = writer.as_mut() {
-            for (status, fhat) in &cells {
+            for (phase, status, fhat, fsig) in &cells {
+                record.push(phase_name(*phase).to_string());
                 record.extend(
                     status
                         .iter()
                         .map(|s| s.sign().map_or(String::new(), |v| v.to_string())),
                 );
                 record.extend(fhat.iter().map(|v| format!("{v}")));
+                match fsig {
+                    Some(s) => record.extend(s.iter().map(|v| format!("{v}"))),
+                    None => record.extend(std::iter::repeat_n(String::new(), 6)),
+                }
             }
             w.write_record(&record)?;
         }
     }
     if let Some(mut w) = writer {
         w.flush()?;
+    }
+    for ch in &mut sum.channels {
+        if ch.fault_rmse_n > 0 {
+            ch.fault_rmse_si = Some((ch.fault_sq_sum / ch.fault_rmse_n as f64).sqrt());
+        }
     }
     sum.imus = imu_idx.len();
     sum.span_s = (
@@ -541,54 +571,4 @@ pub fn replay(
             .with_context(|| format!("cannot write {}", p.display()))?;
     }
     Ok(sum)
-}
-
-/// Writes a simulated run in the SPEC §10 input format, with truth columns
-/// (`fault_imu0_*`, `truth_*`) that `replay` scores against.
-pub fn write_simulated(scn: &Scenario, seed: u64, path: &Path) -> Result<u64> {
-    let mut w =
-        csv::Writer::from_path(path).with_context(|| format!("cannot write {}", path.display()))?;
-    let vel = match scn.aiding.kind {
-        AidingKind::DvlCompass => DVL_COLS,
-        AidingKind::GnssAttitude => GNSS_COLS,
-    };
-    let mut h: Vec<String> = vec!["t".into()];
-    h.extend(IMU_COLS.iter().map(|s| s.to_string()));
-    h.extend(vel.iter().map(|s| s.to_string()));
-    h.extend(ATT_COLS.iter().map(|s| s.to_string()));
-    h.extend(CHANNEL_NAMES.iter().map(|c| format!("fault_imu0_{c}")));
-    h.extend(
-        [
-            "truth_u",
-            "truth_v",
-            "truth_w",
-            "truth_roll",
-            "truth_pitch",
-            "truth_yaw",
-        ]
-        .iter()
-        .map(|s| s.to_string()),
-    );
-    w.write_record(&h)?;
-    let mut n = 0;
-    for s in Simulator::new(scn, seed) {
-        let mut row = vec![format!("{:.4}", s.t)];
-        match s.imu {
-            Some(v) => row.extend(v.iter().map(|x| format!("{x:.9e}"))),
-            None => row.extend(std::iter::repeat_n(String::new(), 6)),
-        }
-        for i in 0..6 {
-            row.push(if s.aiding_available[i] {
-                format!("{:.9e}", s.aiding[i])
-            } else {
-                String::new()
-            });
-        }
-        row.extend(s.fault.iter().map(|x| format!("{x:.9e}")));
-        row.extend(s.truth.state.iter().map(|x| format!("{x:.9e}")));
-        w.write_record(&row)?;
-        n += 1;
-    }
-    w.flush()?;
-    Ok(n)
 }
