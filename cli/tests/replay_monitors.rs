@@ -177,3 +177,48 @@ fn both_monitors_replay_a_dataflash_log_with_one_json_shape() {
     }
     assert_eq!(keys[0], keys[1], "the two monitors' JSON differ in shape");
 }
+
+/// The learned innovation inflation on a real flight (log171's head,
+/// fault-free from 48 s): with it off (`--max-inflation 1`) IMU 2's a_z
+/// raises 2 flag events; learned (the flight default) the velocity
+/// channels' factors come out above 1 (time-correlated GPS and attitude
+/// errors), the attitude channels' at 1, and no channel flags.
+#[test]
+fn learned_inflation_removes_the_false_alarms_of_a_real_flight() {
+    let bin_log = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/ap_log171_head.bin"
+    );
+    let run = |extra: &[&str]| -> serde_json::Value {
+        let o = Command::new(env!("CARGO_BIN_EXE_imu-fdi-sim"))
+            .args(["replay", bin_log, "--from", "48", "--learn", "10", "--json"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let events = |s: &serde_json::Value| -> u64 {
+        s["channels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c["flag_events"].as_u64().unwrap())
+            .sum()
+    };
+    let off = run(&["--max-inflation", "1"]);
+    let on = run(&[]);
+    assert!(events(&off) >= 2, "{off}");
+    assert_eq!(events(&on), 0, "{on}");
+    for imu in on["innovation_inflation"].as_array().unwrap() {
+        let f: Vec<f64> = imu
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert!(f[..3].iter().any(|v| *v > 2.0), "{f:?}");
+        assert!(f[3..].iter().all(|v| *v == 1.0), "{f:?}");
+        assert!(f.iter().all(|v| (1.0..=25.0).contains(v)), "{f:?}");
+    }
+}

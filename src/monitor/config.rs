@@ -125,6 +125,20 @@ pub struct UkfMonitorConfig<T> {
     pub threshold_fraction: T,
     /// Consecutive detections needed to raise or clear a channel flag.
     pub persistence: u16,
+    /// Upper bound of the learned innovation inflation (1 disables it).
+    /// During learning the monitor measures, per innovation channel, how
+    /// much larger the window t statistic's spread is on this vehicle's
+    /// healthy data than the white-noise t distribution says: time
+    /// correlation of real aiding errors (GNSS velocity, an autopilot's
+    /// attitude, latency) makes the window std underestimate the spread of
+    /// the window mean. While monitoring, each channel's t statistic (and
+    /// its GLR weight) is divided by that factor's square root, so the
+    /// false-alarm rate follows from the data, not from a whiteness
+    /// assumption. The factor is ≥ 1 (never more sensitive than the
+    /// white-noise test), bounded by this value (a fault present during
+    /// learning cannot switch detection off), and learned only in the
+    /// learning phase, i.e. frozen while monitoring.
+    pub max_innovation_inflation: T,
     /// Time from alignment to the start of learning, s.
     pub converge_s: T,
     /// Duration of the learning phase, s.
@@ -206,6 +220,7 @@ impl<T: Real> UkfMonitorConfig<T> {
             ),
             threshold_fraction: T::lit(1.0),
             persistence: 2,
+            max_innovation_inflation: T::one(),
             converge_s: T::lit(3.0),
             learn_s: T::lit(7.0),
             learn_tau_s: T::lit(1.5),
@@ -313,7 +328,7 @@ impl<T: Real> UkfMonitorConfig<T> {
         if let Some(&(field, _)) = positive.iter().find(|(_, ok)| !ok) {
             return Err(ConfigError::NonPositive(field));
         }
-        let in_range: [(&'static str, bool); 8] = [
+        let in_range: [(&'static str, bool); 9] = [
             ("lever_arm", self.lever_arm.iter().all(|v| v.finite())),
             (
                 "cos_pitch_min",
@@ -329,6 +344,10 @@ impl<T: Real> UkfMonitorConfig<T> {
                 non_neg(self.sign_deadband) && self.sign_deadband < T::one(),
             ),
             ("converge_s", non_neg(self.converge_s)),
+            (
+                "max_innovation_inflation",
+                self.max_innovation_inflation.finite() && self.max_innovation_inflation >= T::one(),
+            ),
             ("learn_s", non_neg(self.learn_s)),
             (
                 "drift_rate_limit",

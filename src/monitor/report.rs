@@ -125,6 +125,10 @@ pub struct UkfDetail<T> {
     pub diag: [ChannelDiag<T>; NZ],
     /// Covariance re-initialisations since start.
     pub covariance_resets: u32,
+    /// The learned variance inflation of each innovation channel's window
+    /// statistic (1 until learning ends, or when disabled; see
+    /// `UkfMonitorConfig::max_innovation_inflation`).
+    pub innovation_inflation: [T; NZ],
 }
 
 /// What only the OTSUKF monitor reports.
@@ -145,6 +149,7 @@ impl<T: Real> Default for UkfDetail<T> {
             innovation_flags: [0; NZ],
             diag: [ChannelDiag::default(); NZ],
             covariance_resets: 0,
+            innovation_inflation: [T::one(); NZ],
         }
     }
 }

@@ -27,6 +27,10 @@ pub(crate) struct Args {
     /// optimal two-stage UKF (OTSUKF). Same output for both.
     #[arg(long, value_enum, default_value_t = MonitorArg::Ukf)]
     monitor: MonitorArg,
+    /// Bound of the UKF monitor's learned innovation inflation (1: off;
+    /// default 25 for the flight profile, 1 for the simulated one).
+    #[arg(long)]
+    max_inflation: Option<f64>,
     /// Print the JSON summary (one object) on stdout; the human-readable
     /// lines go to stderr.
     #[arg(long)]
@@ -85,6 +89,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         out,
         summary,
         monitor,
+        max_inflation,
         json,
         grace,
         gnss,
@@ -139,6 +144,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         vel_sigma,
         att_sigma,
         monitor: monitor.into(),
+        max_inflation,
     };
     // With --json, stdout carries only the JSON object.
     macro_rules! note {
@@ -235,9 +241,10 @@ pub(crate) fn run(args: Args) -> Result<()> {
             String::new()
         };
         note!(
-            "  {:<8} flagged {:>6} samples{common}, first at {:?} s{scored}",
+            "  {:<8} flagged {:>6} samples in {} events{common}, first at {:?} s{scored}",
             c.channel,
             c.flagged_samples,
+            c.flag_events,
             c.first_detection_s
         );
     }

@@ -27,6 +27,14 @@ pub struct ChannelSummary {
     pub flagged_samples: usize,
     /// Time of the first flag, s.
     pub first_detection_s: Option<f64>,
+    /// Flag events while monitoring: runs of consecutive flagged samples
+    /// (an alarm raised, whatever its length, counts once).
+    pub flag_events: usize,
+    /// With truth: flag events that start on a fault-free monitored
+    /// sample outside the grace time (false-alarm events).
+    pub false_alarm_events: Option<usize>,
+    #[serde(skip)]
+    was_flagged: bool,
     /// With truth columns: fault-active monitored samples.
     pub fault_samples: Option<usize>,
     /// With truth: of those, flagged with the right sign.
@@ -81,6 +89,10 @@ pub struct ReplaySummary {
     pub monitored_samples: usize,
     /// Per channel.
     pub channels: Vec<ChannelSummary>,
+    /// Per IMU, the UKF monitor's learned inflation of each aiding
+    /// channel's t statistic `[v×3, roll, pitch, yaw]` (empty for the
+    /// OTSUKF).
+    pub innovation_inflation: Vec<[f64; 6]>,
 }
 
 fn parse_opt(rec: &csv::StringRecord, idx: Option<usize>) -> Option<f64> {
@@ -128,6 +140,9 @@ pub struct ReplayOptions {
     pub att_sigma: [f64; 3],
     /// The monitor to run on every IMU.
     pub monitor: MonitorKind,
+    /// Bound of the learned innovation inflation (UKF monitor; 1 disables;
+    /// None: 25 for the flight profile, 1 for the simulated one).
+    pub max_inflation: Option<f64>,
 }
 
 impl Default for ReplayOptions {
@@ -144,6 +159,7 @@ impl Default for ReplayOptions {
             vel_sigma: 0.3,
             att_sigma: [1.0 * deg, 1.0 * deg, 10.0 * deg],
             monitor: MonitorKind::Ukf,
+            max_inflation: None,
         }
     }
 }
@@ -192,6 +208,10 @@ pub fn flight_config(
     }
     c.imu_period = dt;
     c.learn_s = opts.learn_s.unwrap_or(20.0);
+    // Real aiding errors are time-correlated: learn the t statistic's
+    // inflation on the flight's own healthy start (bounded: a fault up to
+    // √25 = 5× the white-noise detectable size is still found).
+    c.max_innovation_inflation = opts.max_inflation.unwrap_or(25.0);
     c
 }
 
@@ -399,6 +419,9 @@ pub fn replay(
                 if let Some(l) = opts.learn_s {
                     c.learn_s = l;
                 }
+                if let Some(m) = opts.max_inflation {
+                    c.max_innovation_inflation = m;
+                }
                 c
             }
         };
@@ -423,6 +446,7 @@ pub fn replay(
                 fault_samples: ht.then_some(0),
                 correct_samples: ht.then_some(0),
                 false_alarm_samples: ht.then_some(0),
+                false_alarm_events: ht.then_some(0),
                 ..Default::default()
             })
         })
@@ -454,7 +478,8 @@ pub fn replay(
     }
     let mut last_fault_t = vec![f64::NEG_INFINITY; imu_idx.len()];
     let mut prev_t: Option<f64> = None;
-    for row in &rows {
+    for (row_index, row) in rows.iter().enumerate() {
+        let row_is_last = row_index + 1 == rows.len();
         let t = row.t;
         let step_dt = prev_t.map_or(dt, |p| t - p);
         prev_t = Some(t);
@@ -503,6 +528,11 @@ pub fn replay(
             for (i, ch) in sum.channels.iter_mut().skip(6 * k).take(6).enumerate() {
                 let flag = r.status.get(i).and_then(|s| s.sign());
                 let flagged = flag.is_some_and(|f| f != 0);
+                let rising = flagged && r.phase == Phase::Monitoring && !ch.was_flagged;
+                ch.was_flagged = flagged && r.phase == Phase::Monitoring;
+                if rising {
+                    ch.flag_events += 1;
+                }
                 if flagged && r.phase == Phase::Monitoring {
                     ch.flagged_samples += 1;
                     ch.first_detection_s.get_or_insert(t);
@@ -531,8 +561,14 @@ pub fn replay(
                         }
                     } else if !any_fault && !in_grace && flagged {
                         *ch.false_alarm_samples.get_or_insert(0) += 1;
+                        if rising {
+                            *ch.false_alarm_events.get_or_insert(0) += 1;
+                        }
                     }
                 }
+            }
+            if let (Some(inf), true) = (r.detail.innovation_inflation, row_is_last) {
+                sum.innovation_inflation.push(inf);
             }
             cells.push((r.phase, r.status, r.fault_estimate, r.detail.fault_sigma));
         }

@@ -23,6 +23,8 @@ pub enum MonitorKind {
 pub struct ReplayDetail {
     /// Standard deviation of the fault estimate (OTSUKF only).
     pub fault_sigma: Option<ImuVec<f64>>,
+    /// The learned innovation inflation per aiding channel (UKF monitor).
+    pub innovation_inflation: Option<[f64; 6]>,
 }
 
 /// One monitor of either kind.
@@ -55,11 +57,13 @@ impl ReplayMonitor {
         aiding: &Measurement<f64>,
     ) -> Report<f64, ReplayDetail> {
         match self {
-            Self::Ukf(m) => m
-                .step(imu, dt, aiding)
-                .map_detail(|_| ReplayDetail::default()),
+            Self::Ukf(m) => m.step(imu, dt, aiding).map_detail(|d| ReplayDetail {
+                fault_sigma: None,
+                innovation_inflation: Some(d.innovation_inflation),
+            }),
             Self::Otsukf(m) => m.step(imu, dt, aiding).map_detail(|d| ReplayDetail {
                 fault_sigma: Some(d.fault_sigma),
+                innovation_inflation: None,
             }),
         }
     }

@@ -34,6 +34,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         };
         match self.phase {
             Phase::Learning => {
+                self.learn_inflation();
                 if let Some(f) = instant(self) {
                     let k = (dt_learn / self.cfg.learn_tau_s).min(T::one());
                     self.nominal_bias += f * k;
@@ -80,6 +81,18 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             rbar,
             weight,
         } = window_evidence(&self.windows, self.cfg.statistic, self.cfg.outlier_k);
+        // The learned inflation: the test and the GLR weigh each window mean
+        // by the spread it has on this vehicle's healthy data.
+        let mut tstat = tstat;
+        let mut weight = weight;
+        for ((t, w), c) in tstat
+            .iter_mut()
+            .zip(weight.iter_mut())
+            .zip(self.inflation.iter())
+        {
+            *t /= c.sqrt_fast();
+            *w /= *c;
+        }
         let flags = test_flags(&tstat, threshold);
         let scale = self.window_scale();
         let mut m_eff = self.signature;
@@ -138,6 +151,66 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.report.detail.innovation_flags = flags;
         self.report.fault_estimate = est;
         self.report.detail.fault_estimate_as_written = as_written;
+    }
+
+    /// Accumulates each full window's t² during learning, clipped at 10²
+    /// so one glitch (a 60 ms spike, an aiding jump) moves the mean by at
+    /// most 100/n.
+    fn learn_inflation(&mut self) {
+        if self.cfg.max_innovation_inflation <= T::one() {
+            return;
+        }
+        let ev = window_evidence(&self.windows, self.cfg.statistic, self.cfg.outlier_k);
+        let clip = T::lit(100.0);
+        for (((s, n), t), full) in self
+            .inflation_sum
+            .iter_mut()
+            .zip(self.inflation_n.iter_mut())
+            .zip(ev.tstat.iter())
+            .zip(ev.full.iter())
+        {
+            if *full {
+                *s += (*t * *t).min(clip);
+                *n += T::one();
+            }
+        }
+    }
+
+    /// At the end of learning: inflation = what the data prove of mean t²
+    /// over its white-noise value. For ν = W − 1 the white t has
+    /// `E[t²] = ν/(ν−2)` and `Var[t²] = 3ν²/((ν−2)(ν−4)) − E[t²]²` (normal:
+    /// 1 and 2); the learning gave `n` overlapping windows, i.e. about
+    /// `n/W` independent ones. The factor is the one-sided 97.7 % lower
+    /// bound `(mean − 2·sd/√(n/W)) / E[t²]`, clamped to
+    /// `[1, max_innovation_inflation]`: sampling noise of a short learning
+    /// phase on white data gives 1, not a desensitised test. Channels with
+    /// fewer than 2·W windows keep 1.
+    pub(super) fn freeze_inflation(&mut self) {
+        let nu = W.saturating_sub(1) as f64;
+        let (white, var) = match self.cfg.statistic {
+            Statistic::Normalized => (1.0, 2.0),
+            _ if nu > 4.0 => {
+                let e2 = nu / (nu - 2.0);
+                (e2, 3.0 * nu * nu / ((nu - 2.0) * (nu - 4.0)) - e2 * e2)
+            }
+            _ => return,
+        };
+        let (white, sd) = (T::lit(white), T::lit(var.sqrt()));
+        let w = T::lit(W as f64);
+        let max = self.cfg.max_innovation_inflation;
+        for ((c, s), n) in self
+            .inflation
+            .iter_mut()
+            .zip(self.inflation_sum.iter())
+            .zip(self.inflation_n.iter())
+        {
+            *c = if *n >= T::lit(2.0) * w {
+                let lower = *s / *n - T::lit(2.0) * sd / (*n / w).sqrt_fast();
+                (lower / white).max(T::one()).min(max)
+            } else {
+                T::one()
+            };
+        }
     }
 
     /// IMU channel j is monitored when the innovation channels carrying its

@@ -65,6 +65,11 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     latest_variance: ImuVec<T>,
     nominal_bias: ImuVec<T>,
     learn_clock: T,
+    /// Learned variance inflation of each channel's t statistic (≥ 1).
+    inflation: [T; NZ],
+    /// Σ clipped t² and count over the learning phase, per channel.
+    inflation_sum: [T; NZ],
+    inflation_n: [T; NZ],
     persistence: Persistence<NZ>,
     paper_inv: Option<Mat6<T>>,
     phase: Phase,
@@ -120,6 +125,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             latest_variance: ImuVec::from_element(T::one()),
             nominal_bias: ImuVec::zeros(),
             learn_clock: T::zero(),
+            inflation: [T::one(); NZ],
+            inflation_sum: [T::zero(); NZ],
+            inflation_n: [T::zero(); NZ],
             persistence: Persistence::new(cfg.persistence),
             paper_inv,
             phase: Phase::Aligning,
@@ -460,6 +468,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             }
             Some(Phase::Monitoring) => {
                 self.phase = Phase::Monitoring;
+                self.freeze_inflation();
                 for w in self.windows.iter_mut() {
                     w.clear();
                 }
@@ -497,6 +506,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         r.corrected_imu = corrected;
         r.detail.covariance_resets = self.ukf.covariance_resets();
+        r.detail.innovation_inflation = self.inflation;
         if !updated {
             r.detail.diag = [ChannelDiag::default(); NZ];
         }
