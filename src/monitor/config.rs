@@ -143,6 +143,15 @@ pub struct UkfMonitorConfig<T> {
     pub converge_s: T,
     /// Duration of the learning phase, s.
     pub learn_s: T,
+    /// Largest nominal bias the learner may attribute to the IMU per
+    /// channel: the sensor's specified turn-on bias (plus whatever drift
+    /// the learning may see). A larger bias present from power-up is not
+    /// absorbed: the learned bias stops at this bound and the excess stays
+    /// in the innovations, where the detector reports it as a fault once
+    /// monitoring starts (until then the report's phase says the monitor
+    /// cannot judge yet and every channel is `NotMonitored`). `None`:
+    /// 20 × `min_fault`, a bound no datasheet needs (the former default).
+    pub max_nominal_bias: Option<ImuVec<T>>,
     /// Time constant of the nominal-bias estimator during learning, s.
     pub learn_tau_s: T,
     /// Time constant of drift tracking while monitoring, s.
@@ -223,6 +232,7 @@ impl<T: Real> UkfMonitorConfig<T> {
             max_innovation_inflation: T::one(),
             converge_s: T::lit(3.0),
             learn_s: T::lit(7.0),
+            max_nominal_bias: None,
             learn_tau_s: T::lit(1.5),
             drift_tau_s: T::lit(200.0),
             drift_rate_limit: ImuVec::new(
@@ -328,7 +338,7 @@ impl<T: Real> UkfMonitorConfig<T> {
         if let Some(&(field, _)) = positive.iter().find(|(_, ok)| !ok) {
             return Err(ConfigError::NonPositive(field));
         }
-        let in_range: [(&'static str, bool); 9] = [
+        let in_range: [(&'static str, bool); 10] = [
             ("lever_arm", self.lever_arm.iter().all(|v| v.finite())),
             (
                 "cos_pitch_min",
@@ -344,6 +354,11 @@ impl<T: Real> UkfMonitorConfig<T> {
                 non_neg(self.sign_deadband) && self.sign_deadband < T::one(),
             ),
             ("converge_s", non_neg(self.converge_s)),
+            (
+                "max_nominal_bias",
+                self.max_nominal_bias
+                    .is_none_or(|m| m.iter().all(|v| non_neg(*v))),
+            ),
             (
                 "max_innovation_inflation",
                 self.max_innovation_inflation.finite() && self.max_innovation_inflation >= T::one(),

@@ -67,9 +67,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             }
             _ => {}
         }
-        let cap = T::lit(MAX_NOMINAL_BIAS_FACTOR);
-        for (b, m) in self.nominal_bias.iter_mut().zip(self.cfg.min_fault.iter()) {
-            *b = b.max(-*m * cap).min(*m * cap);
+        let cap = self
+            .cfg
+            .max_nominal_bias
+            .unwrap_or_else(|| self.cfg.min_fault * T::lit(MAX_NOMINAL_BIAS_FACTOR));
+        for (b, m) in self.nominal_bias.iter_mut().zip(cap.iter()) {
+            *b = b.max(-*m).min(*m);
         }
     }
 
@@ -195,7 +198,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             }
             _ => return,
         };
-        let (white, sd) = (T::lit(white), T::lit(var.sqrt()));
+        let (white, sd) = (T::lit(white), T::lit(var).sqrt_fast());
         let w = T::lit(W as f64);
         let max = self.cfg.max_innovation_inflation;
         for ((c, s), n) in self
