@@ -15,4 +15,5 @@ pub mod parity_tables;
 pub mod replay;
 pub mod replay_monitor;
 mod replay_sim;
+mod replay_summary;
 pub mod stats_ci;
