@@ -163,7 +163,7 @@ fn nan_aiding_channels_are_ignored() {
         },
     );
     assert!(finite(&r));
-    assert!(!r.diag[0].fused);
+    assert!(!r.detail.diag[0].fused);
 }
 
 /// A channel whose aiding is absent is "not monitored", a third state

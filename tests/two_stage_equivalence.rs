@@ -9,7 +9,7 @@
     clippy::needless_range_loop
 )] // test code: a panic is a failed assertion
 
-use imu_fdi::filter::{Gate, SigmaParams, TwoStageUkf};
+use imu_fdi::filter::{Gate, Otsukf, SigmaParams};
 use nalgebra::{SMatrix, SVector};
 use rand::{Rng, SeedableRng};
 
@@ -35,7 +35,7 @@ fn two_stage_equals_the_augmented_kalman_filter() {
     // not cancel away the digits both filters are compared on.
     let px0 = M6::from_diagonal(&V6::new(1e-2, 1e-2, 1e-2, 1e-6, 1e-6, 1e-6));
     let pf0 = M6::identity();
-    let mut ts = TwoStageUkf::<f64, 6, 13, 6>::new(
+    let mut ts = Otsukf::<f64, 6, 13, 6>::new(
         x0,
         px0,
         V6::zeros(),

@@ -95,7 +95,7 @@ enum Cmd {
     /// Smallest bias each method detects in >= 99 % of runs at zero false
     /// alarms over fault-free hours, with its delay (redundant arrays).
     ParitySweep(cmd::parity_sweep::Args),
-    /// The optimal two-stage UKF on S3 (s3: realistic sensors; s3-paper: the
+    /// The optimal two-stage UKF (OTSUKF) on S3 (s3: realistic sensors; s3-paper: the
     /// paper's noise, aiding at the IMU rate): SPEC §9 RMSE over seeds, beside
     /// the 12-state augmented UKF and the paper's numbers.
     Otsukf(cmd::otsukf::Args),
@@ -111,7 +111,10 @@ enum Cmd {
     Detections(cmd::detections::Args),
     /// Write a simulated run in the SPEC §10 replay format (with truth columns).
     Simulate(cmd::simulate::Args),
-    /// Replay a SPEC §10 CSV through the monitor (default detector: run-time matrix + GLR).
+    /// Replay a SPEC §10 CSV, a ULog or a DataFlash log through a single-IMU
+    /// monitor (`--monitor ukf`: UKF innovation monitor, default detector
+    /// run-time matrix + GLR; `--monitor otsukf`: the OTSUKF), one output
+    /// format for both.
     Replay(cmd::replay::Args),
     /// A flight report: any log (.ulg, .bin, SPEC §10 CSV; one or three
     /// IMUs) replayed into one self-contained HTML page that opens offline:

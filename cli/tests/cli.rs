@@ -64,7 +64,7 @@ fn simulate_then_replay_round_trip_detects_s2_faults() {
     }
     let text = std::fs::read_to_string(&out).unwrap();
     let header = text.lines().next().unwrap();
-    assert!(header.starts_with("t,x_u,x_v,x_w,x_roll,x_pitch,x_yaw,flag_ax"));
+    assert!(header.starts_with("t,x_u,x_v,x_w,x_roll,x_pitch,x_yaw,phase,flag_ax"));
     assert_eq!(text.lines().count(), 6501);
 }
 
@@ -550,10 +550,12 @@ fn dataflash_log_replays_every_imu_and_attributes_common_mode_flags() {
     let ay = channel(&s, "imu1_ay");
     let t = ay["first_correct_s"].as_f64().unwrap();
     assert!(
-        (78.0..80.0).contains(&t),
+        (78.0..80.5).contains(&t),
         "−1 m/s² step at 78 s found at {t}: {ay}"
     );
-    assert!(ay["correct_samples"].as_u64().unwrap() > 200, "{ay}");
+    // 193 of 298 with the learned innovation inflation (233 with
+    // `--max-inflation 1`): detected 0.8 s later.
+    assert!(ay["correct_samples"].as_u64().unwrap() > 180, "{ay}");
     for c in s["channels"].as_array().unwrap() {
         let name = c["channel"].as_str().unwrap();
         if !name.starts_with("imu") || name.starts_with("imu2_g") {

@@ -1,4 +1,4 @@
-//! Scenario S3 runs of the optimal two-stage UKF ([`OtsukfMonitor`]), of the
+//! Scenario S3 runs of the optimal two-stage UKF, OTSUKF ([`OtsukfMonitor`]), of the
 //! 12-state augmented UKF it is compared with, and the SPEC §9 RMSE.
 
 // Fixed 6- and 12-entry tables indexed in parallel.
@@ -32,7 +32,7 @@ pub enum Setting {
     Realistic,
 }
 
-/// The two-stage monitor's configuration for an S3 scenario.
+/// The OTSUKF monitor's configuration for an S3 scenario.
 pub fn otsukf_config<T: Real>(scn: &Scenario, setting: Setting) -> OtsukfConfig<T> {
     let mut base = monitor_config::<T>(scn, &RunOptions::default());
     // S3's first faults start at 10 s: align, converge 3 s, learn 5 s.
@@ -164,7 +164,7 @@ pub struct Estimate {
     pub fault_sigma: [f64; 6],
 }
 
-/// Runs the two-stage monitor in `T` over `scn` (seed `seed`). Returns the
+/// Runs the OTSUKF monitor in `T` over `scn` (seed `seed`). Returns the
 /// RMSE accumulator and the number of monitoring-phase samples with a
 /// channel flagged while no fault was active on it (false flags).
 pub fn run_otsukf<T: Real>(
@@ -206,7 +206,7 @@ pub fn run_otsukf_traced<T: Real>(
                 t: s.t,
                 state,
                 fault,
-                fault_sigma: core::array::from_fn(|i| r.fault_sigma[i].to_f64()),
+                fault_sigma: core::array::from_fn(|i| r.detail.fault_sigma[i].to_f64()),
             });
             for c in 0..6 {
                 let flagged = matches!(r.status[c].sign(), Some(v) if v != 0);
@@ -220,7 +220,7 @@ pub fn run_otsukf_traced<T: Real>(
 }
 
 /// The 12-state augmented UKF (state `[x; f]`, fault random walk) with the
-/// same model, noise and start-up as the two-stage monitor: the reference
+/// same model, noise and start-up as the OTSUKF monitor: the reference
 /// the two-stage filter is compared with on S3.
 pub fn run_augmented(
     scn: &Scenario,

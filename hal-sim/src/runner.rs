@@ -108,29 +108,29 @@ pub fn run_with<T: Real>(
             fault_active: s.fault_active,
             flag: core::array::from_fn(|i| r.status[i].sign()),
             fhat: f(&r.fault_estimate),
-            fhat_as_written: f(&r.fault_estimate_as_written),
+            fhat_as_written: f(&r.detail.fault_estimate_as_written),
             state: f(&r.state),
             sigma: f(&r.state_sigma),
             truth: s.truth.state,
             nominal_bias: f(&r.nominal_bias),
             true_bias: s.imu_bias,
             phase: r.phase,
-            t_stat: core::array::from_fn(|i| r.t_statistic[i].to_f64()),
+            t_stat: core::array::from_fn(|i| r.detail.t_statistic[i].to_f64()),
             innovation: core::array::from_fn(|i| {
-                if r.diag[i].available {
-                    r.diag[i].innovation.to_f64()
+                if r.detail.diag[i].available {
+                    r.detail.diag[i].innovation.to_f64()
                 } else {
                     f64::NAN
                 }
             }),
             innovation_sigma: core::array::from_fn(|i| {
-                if r.diag[i].available {
-                    r.diag[i].variance.to_f64().sqrt()
+                if r.detail.diag[i].available {
+                    r.detail.diag[i].variance.to_f64().sqrt()
                 } else {
                     f64::NAN
                 }
             }),
-            covariance_resets: r.covariance_resets,
+            covariance_resets: r.detail.covariance_resets,
             health_event: r.health != imu_fdi::monitor::Health::default(),
             health: r.health,
         });

@@ -73,7 +73,7 @@ pub fn monitor_run<T: Real>(scn: &Scenario) -> Option<(StateVec<T>, StateVec<T>)
     last
 }
 
-/// Runs the two-stage UKF monitor in `T` over the first [`MONITOR_STEPS`]
+/// Runs the OTSUKF monitor in `T` over the first [`MONITOR_STEPS`]
 /// IMU periods of S3 (seed 1, the realistic configuration; monitoring from
 /// about 8 s on, faults from 10 s) and returns its whole fault estimate
 /// `f̂` and the estimate's standard deviations. `each` gets every report's
@@ -90,7 +90,7 @@ pub fn otsukf_run<T: Real>(
         let (u, dt, m) = rounded_to_f32(&s);
         each(&mut || {
             let r = monitor.step(&u, dt, &m);
-            last = Some((r.total_bias, r.fault_sigma));
+            last = Some((r.detail.total_bias, r.detail.fault_sigma));
             r.phase
         });
     }

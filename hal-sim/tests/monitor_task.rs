@@ -79,7 +79,7 @@ fn s2_with_two_percent_failed_reads_still_detects_every_fault() {
     assert_eq!(false_flags, 0);
 }
 
-/// The same task running the optimal two-stage UKF instead: S2 through the
+/// The same task running the OTSUKF instead: S2 through the
 /// driver and the emulated chip, every fault flagged on its channel with the
 /// right sign, and the corrected sample closer to the truth than the raw one
 /// while a fault is active.

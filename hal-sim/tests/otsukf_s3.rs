@@ -1,4 +1,4 @@
-//! The optimal two-stage UKF monitor on scenario S3: accuracy against the
+//! The OTSUKF monitor on scenario S3: accuracy against the
 //! paper and against the 12-state augmented UKF, false flags, and `f32`
 //! against `f64`. (The linear-case equivalence to the augmented Kalman
 //! filter is `tests/two_stage_equivalence.rs` of the core crate.)
@@ -240,8 +240,8 @@ fn f32_follows_f64_on_s3() {
         assert!(r32.fault_estimate.iter().all(|v| v.is_finite()));
         if r64.phase == Phase::Monitoring {
             for c in 0..6 {
-                let d =
-                    (f64::from(r32.total_bias[c]) - r64.total_bias[c]).abs() / r64.fault_sigma[c];
+                let d = (f64::from(r32.detail.total_bias[c]) - r64.detail.total_bias[c]).abs()
+                    / r64.detail.fault_sigma[c];
                 worst = worst.max(d);
                 differing += u32::from(r32.status[c] != r64.status[c]);
             }
@@ -286,7 +286,7 @@ fn f32_day_long_run_stays_finite_without_false_flags() {
                 .iter()
                 .any(|c| matches!(c.sign(), Some(v) if v != 0)),
         );
-        worst_sigma = worst_sigma.max(r.fault_sigma.amax());
+        worst_sigma = worst_sigma.max(r.detail.fault_sigma.amax());
         steps += 1;
     }
     println!("24 h f32: {steps} steps, covariance resets {resets}, flagged samples {flags}, largest fault σ {worst_sigma:e}");

@@ -1,4 +1,4 @@
-//! Optimal two-stage UKF (\[OTS\], SPEC §6): joint estimation of the state
+//! Optimal two-stage UKF, OTSUKF (\[OTS\], SPEC §6): joint estimation of the state
 //! and of additive input (IMU) faults modelled as random walks.
 
 use nalgebra::{SMatrix, SVector};
@@ -24,7 +24,7 @@ use crate::math::{cholesky, cholesky_solve_right, symmetrize, wrap_pi, Real};
 /// `Q̄ = Q^x + Ū P^f (P^f_{k+1|k})⁻¹ Q^f Ūᵀ`, positive semi-definite by
 /// construction (SPEC §6), and `U = Ū P^f (P^f_{k+1|k})⁻¹`.
 #[derive(Debug, Clone)]
-pub struct TwoStageUkf<T, const N: usize, const S: usize, const L: usize> {
+pub struct Otsukf<T, const N: usize, const S: usize, const L: usize> {
     bias_free: Ukf<T, N, S>,
     fault: SVector<T, L>,
     pf: SMatrix<T, L, L>,
@@ -37,7 +37,7 @@ pub struct TwoStageUkf<T, const N: usize, const S: usize, const L: usize> {
 
 /// What a two-stage update produced.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TwoStageUpdate<T, const N: usize, const M: usize, const L: usize> {
+pub struct OtsukfUpdate<T, const N: usize, const M: usize, const L: usize> {
     /// The bias-free filter's update (innovations `r̄`, gain `K^x`, …).
     pub bias_free: UpdateOutput<T, N, M>,
     /// The fault filter's innovation `r^f = r̄ − S f̂` (0 for channels not
@@ -55,7 +55,7 @@ fn wrap_angles<T: Real, const K: usize>(v: &mut SVector<T, K>, angles: &[bool; K
     }
 }
 
-impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, S, L> {
+impl<T: Real, const N: usize, const S: usize, const L: usize> Otsukf<T, N, S, L> {
     /// The filter at state `x0` (covariance `px0`) and fault `f0`
     /// (covariance `pf0`), uncorrelated (\[OTS\] eq. (27): `P^{xf}₀ = 0`, so
     /// `V₀ = 0`, `x̄₀ = x₀`, `P̄₀ = P^x₀`), with fault random-walk covariance
@@ -225,7 +225,7 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
         r: &SVector<T, M>,
         meas_angles: &[bool; M],
         gate: &mut Gate<T, M>,
-    ) -> Result<TwoStageUpdate<T, N, M, L>, UkfError<E>> {
+    ) -> Result<OtsukfUpdate<T, N, M, L>, UkfError<E>> {
         self.update_with(z, available, h, hjac, r, meas_angles, gate, None)
     }
 
@@ -248,7 +248,7 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
         r: &SVector<T, M>,
         meas_angles: &[bool; M],
         gate: &mut Gate<T, M>,
-    ) -> Result<TwoStageUpdate<T, N, M, L>, UkfError<E>> {
+    ) -> Result<OtsukfUpdate<T, N, M, L>, UkfError<E>> {
         let lin = |d: &SVector<T, N>| hjac * d;
         let split = Split {
             order,
@@ -269,7 +269,7 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
         meas_angles: &[bool; M],
         gate: &mut Gate<T, M>,
         split: Option<Split<'_, T, N, M>>,
-    ) -> Result<TwoStageUpdate<T, N, M, L>, UkfError<E>> {
+    ) -> Result<OtsukfUpdate<T, N, M, L>, UkfError<E>> {
         // Predicted full estimate; the bias-free innovation is
         // r̄ = y − h(x̄) ≈ (y + S f̂) − h(x̄ + U f̂).
         let mut x_full = self.bias_free.state() + self.u * self.fault;
@@ -341,7 +341,7 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> TwoStageUkf<T, N, 
         self.fault = fault;
         self.pf = pf;
         self.v = self.u - out.gain * s;
-        Ok(TwoStageUpdate {
+        Ok(OtsukfUpdate {
             bias_free: out,
             fault_innovation: rf,
             fault_gain: kf,

@@ -125,10 +125,33 @@ pub struct UkfMonitorConfig<T> {
     pub threshold_fraction: T,
     /// Consecutive detections needed to raise or clear a channel flag.
     pub persistence: u16,
+    /// Upper bound of the learned innovation inflation (1 disables it).
+    /// During learning the monitor measures, per innovation channel, how
+    /// much larger the window t statistic's spread is on this vehicle's
+    /// healthy data than the white-noise t distribution says: time
+    /// correlation of real aiding errors (GNSS velocity, an autopilot's
+    /// attitude, latency) makes the window std underestimate the spread of
+    /// the window mean. While monitoring, each channel's t statistic (and
+    /// its GLR weight) is divided by that factor's square root, so the
+    /// false-alarm rate follows from the data, not from a whiteness
+    /// assumption. The factor is ≥ 1 (never more sensitive than the
+    /// white-noise test), bounded by this value (a fault present during
+    /// learning cannot switch detection off), and learned only in the
+    /// learning phase, i.e. frozen while monitoring.
+    pub max_innovation_inflation: T,
     /// Time from alignment to the start of learning, s.
     pub converge_s: T,
     /// Duration of the learning phase, s.
     pub learn_s: T,
+    /// Largest nominal bias the learner may attribute to the IMU per
+    /// channel: the sensor's specified turn-on bias (plus whatever drift
+    /// the learning may see). A larger bias present from power-up is not
+    /// absorbed: the learned bias stops at this bound and the excess stays
+    /// in the innovations, where the detector reports it as a fault once
+    /// monitoring starts (until then the report's phase says the monitor
+    /// cannot judge yet and every channel is `NotMonitored`). `None`:
+    /// 20 × `min_fault`, a bound no datasheet needs (the former default).
+    pub max_nominal_bias: Option<ImuVec<T>>,
     /// Time constant of the nominal-bias estimator during learning, s.
     pub learn_tau_s: T,
     /// Time constant of drift tracking while monitoring, s.
@@ -206,8 +229,10 @@ impl<T: Real> UkfMonitorConfig<T> {
             ),
             threshold_fraction: T::lit(1.0),
             persistence: 2,
+            max_innovation_inflation: T::one(),
             converge_s: T::lit(3.0),
             learn_s: T::lit(7.0),
+            max_nominal_bias: None,
             learn_tau_s: T::lit(1.5),
             drift_tau_s: T::lit(200.0),
             drift_rate_limit: ImuVec::new(
@@ -313,7 +338,7 @@ impl<T: Real> UkfMonitorConfig<T> {
         if let Some(&(field, _)) = positive.iter().find(|(_, ok)| !ok) {
             return Err(ConfigError::NonPositive(field));
         }
-        let in_range: [(&'static str, bool); 8] = [
+        let in_range: [(&'static str, bool); 10] = [
             ("lever_arm", self.lever_arm.iter().all(|v| v.finite())),
             (
                 "cos_pitch_min",
@@ -329,6 +354,15 @@ impl<T: Real> UkfMonitorConfig<T> {
                 non_neg(self.sign_deadband) && self.sign_deadband < T::one(),
             ),
             ("converge_s", non_neg(self.converge_s)),
+            (
+                "max_nominal_bias",
+                self.max_nominal_bias
+                    .is_none_or(|m| m.iter().all(|v| non_neg(*v))),
+            ),
+            (
+                "max_innovation_inflation",
+                self.max_innovation_inflation.finite() && self.max_innovation_inflation >= T::one(),
+            ),
             ("learn_s", non_neg(self.learn_s)),
             (
                 "drift_rate_limit",

@@ -11,8 +11,10 @@ mod ukf_monitor;
 
 pub use align::align_state;
 pub use config::{ConfigError, UkfMonitorConfig};
-pub use otsukf_monitor::{OtsReport, OtsukfConfig, OtsukfMonitor};
-pub use report::{ChannelState, Health, Phase, Report};
+pub use otsukf_monitor::{OtsukfConfig, OtsukfMonitor};
+pub use report::{
+    ChannelState, Health, OtsukfDetail, OtsukfReport, Phase, Report, UkfDetail, UkfReport,
+};
 #[allow(deprecated)] // the former name, kept for users
 pub use task::Monitor;
 pub use task::{

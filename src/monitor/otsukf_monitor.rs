@@ -1,4 +1,4 @@
-//! The optimal two-stage UKF as a monitor: joint state and IMU-fault
+//! The optimal two-stage UKF (OTSUKF) as a monitor: joint state and IMU-fault
 //! estimation, the corrected IMU sample, and a per-channel decision from the
 //! fault estimate and its variance.
 
@@ -6,8 +6,10 @@ use nalgebra::Vector3;
 
 use super::align::align_state;
 use super::input::{check_period, in_range, lever_arm_rates, next_phase, usable_aiding, Period};
-use super::{ChannelState, ConfigError, Health, Phase, UkfMonitorConfig};
-use crate::filter::{Gate, TwoStageUkf, UkfError};
+use super::{
+    ChannelState, ConfigError, Health, OtsukfDetail, OtsukfReport, Phase, UkfMonitorConfig,
+};
+use crate::filter::{Gate, Otsukf, UkfError};
 use crate::math::Real;
 use crate::model::{
     discrete_process_noise_structured, ImuVec, Mat6, Measurement, MeasurementModel, ModelError,
@@ -64,7 +66,7 @@ impl<T: Real> OtsukfConfig<T> {
     /// adaptation (×10 for 0.3 s after a 3σ move) is on for the
     /// accelerometers only: with 10 Hz GNSS or 5 Hz DVL/compass aiding it
     /// measured no gain on the gyro channels of S2 and S3 and 2 % more
-    /// fault-free noise (README, two-stage UKF).
+    /// fault-free noise (README, OTSUKF).
     pub fn from_base(base: UkfMonitorConfig<T>) -> Self {
         let deg = core::f64::consts::PI / 180.0;
         let ga = T::lit(0.05);
@@ -131,52 +133,7 @@ impl<T: Real> OtsukfConfig<T> {
     }
 }
 
-/// What [`OtsukfMonitor::step`] reports every period.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct OtsReport<T> {
-    /// Life-cycle phase.
-    pub phase: Phase,
-    /// Per IMU channel decision.
-    pub status: [ChannelState; 6],
-    /// Fault estimate `f̂ − b` (the nominal bias `b` learned at start-up
-    /// removed), raw units (m/s², rad/s).
-    pub fault_estimate: ImuVec<T>,
-    /// Standard deviation of the fault estimate.
-    pub fault_sigma: ImuVec<T>,
-    /// Everything the filter attributes to the IMU: `f̂` (nominal bias plus
-    /// fault).
-    pub total_bias: ImuVec<T>,
-    /// The corrected IMU sample `u_m − f̂` a flight controller can use
-    /// instead of the raw one.
-    pub corrected_imu: ImuVec<T>,
-    /// State estimate `[u, v, w, φ, θ, ψ]`.
-    pub state: StateVec<T>,
-    /// Its standard deviation.
-    pub state_sigma: StateVec<T>,
-    /// Input and numerical health.
-    pub health: Health,
-    /// True when an aiding update was applied in this period.
-    pub updated: bool,
-}
-
-impl<T: Real> Default for OtsReport<T> {
-    fn default() -> Self {
-        Self {
-            phase: Phase::Aligning,
-            status: [ChannelState::NotMonitored; 6],
-            fault_estimate: ImuVec::zeros(),
-            fault_sigma: ImuVec::zeros(),
-            total_bias: ImuVec::zeros(),
-            corrected_imu: ImuVec::zeros(),
-            state: StateVec::zeros(),
-            state_sigma: StateVec::zeros(),
-            health: Health::default(),
-            updated: false,
-        }
-    }
-}
-
-/// The optimal two-stage UKF monitor (\[OTS\], SPEC §6) for one IMU.
+/// The optimal two-stage UKF (OTSUKF) monitor (\[OTS\], SPEC §6) for one IMU.
 ///
 /// Per step: input checks → time update with the corrected input
 /// `u_m − f̂` (Jacobians at the full estimate) → two-stage measurement
@@ -190,7 +147,7 @@ pub struct OtsukfMonitor<T> {
     cfg: OtsukfConfig<T>,
     model: VehicleModel<T>,
     meas: MeasurementModel<T>,
-    filter: TwoStageUkf<T, 6, 13, 6>,
+    filter: Otsukf<T, 6, 13, 6>,
     gate: Gate<T, NZ>,
     phase: Phase,
     phase_time: T,
@@ -209,7 +166,7 @@ impl<T: Real> OtsukfMonitor<T> {
         let p0 = Mat6::from_diagonal(&b.initial_sigma.component_mul(&b.initial_sigma));
         let pf0 = Mat6::from_diagonal(&cfg.fault_sigma0.component_mul(&cfg.fault_sigma0));
         let qf = Mat6::from_diagonal(&(cfg.fault_psd * b.imu_period));
-        let mut filter = TwoStageUkf::new(
+        let mut filter = Otsukf::new(
             StateVec::zeros(),
             p0,
             ImuVec::zeros(),
@@ -240,15 +197,15 @@ impl<T: Real> OtsukfMonitor<T> {
         })
     }
 
-    /// The two-stage filter.
-    pub fn filter(&self) -> &TwoStageUkf<T, 6, 13, 6> {
+    /// The OTSUKF filter.
+    pub fn filter(&self) -> &Otsukf<T, 6, 13, 6> {
         &self.filter
     }
 
     /// One monitor period with the measured `dt` and whatever aiding
     /// arrived. Never panics; anomalies are reported in the health flags.
     #[inline(never)] // one copy in the image, not one per caller (issue 17)
-    pub fn step(&mut self, imu: &ImuVec<T>, dt: T, aiding: &Measurement<T>) -> OtsReport<T> {
+    pub fn step(&mut self, imu: &ImuVec<T>, dt: T, aiding: &Measurement<T>) -> OtsukfReport<T> {
         let b = self.cfg.base;
         let mut health = Health::default();
         let in_range = in_range(imu, &b.full_scale);
@@ -445,7 +402,7 @@ impl<T: Real> OtsukfMonitor<T> {
     }
 
     #[inline(never)] // own stack frame and one copy (issue 17)
-    fn compose(&self, imu: &ImuVec<T>, health: Health, updated: bool) -> OtsReport<T> {
+    fn compose(&self, imu: &ImuVec<T>, health: Health, updated: bool) -> OtsukfReport<T> {
         let fault = *self.filter.fault();
         let pf = self.filter.fault_covariance();
         let px = self.filter.state_variance();
@@ -458,17 +415,20 @@ impl<T: Real> OtsukfMonitor<T> {
         } else {
             [ChannelState::NotMonitored; 6]
         };
-        OtsReport {
+        OtsukfReport {
             phase: self.phase,
             status,
             fault_estimate: fault - self.nominal,
-            fault_sigma: pf.diagonal().map(|v| v.max(T::zero()).sqrt_fast()),
-            total_bias: fault,
+            nominal_bias: self.nominal,
             corrected_imu: imu - fault,
             state: self.filter.state(),
             state_sigma: px.map(|v| v.max(T::zero()).sqrt_fast()),
             health,
             updated,
+            detail: OtsukfDetail {
+                fault_sigma: pf.diagonal().map(|v| v.max(T::zero()).sqrt_fast()),
+                total_bias: fault,
+            },
         }
     }
 }

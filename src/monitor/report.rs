@@ -72,57 +72,136 @@ pub struct Health {
     pub aiding_realigned: bool,
 }
 
-/// Everything the monitor says about one period.
+/// Everything a single-IMU monitor says about one period: the fields both
+/// monitors share at top level, the monitor-specific ones in `detail`
+/// ([`UkfDetail`] for [`UkfMonitor`](super::UkfMonitor), [`OtsukfDetail`]
+/// for [`OtsukfMonitor`](super::OtsukfMonitor)). One shape, so a flight
+/// controller, a logger or the replay tool handles either monitor with the
+/// same code and reads the extension only where it needs it.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Report<T> {
+pub struct Report<T, X = UkfDetail<T>> {
     /// Life-cycle phase.
     pub phase: Phase,
     /// Per IMU channel `[a_x, a_y, a_z, p, q, r]`.
     pub status: [ChannelState; NU],
-    /// Fault estimate (corrected innovation mapping `M⁺ r̄`, SPEC §6).
+    /// Fault estimate per channel, raw units (m/s², rad/s), nominal bias
+    /// removed.
     pub fault_estimate: ImuVec<T>,
-    /// Fault estimate by \[UKF\] §4 as written, for comparison.
-    pub fault_estimate_as_written: ImuVec<T>,
-    /// Learned nominal bias (subtracted from the IMU before filtering).
+    /// Learned nominal bias (SPEC §8a): what the monitor treats as the
+    /// IMU's own healthy error, not a fault.
     pub nominal_bias: ImuVec<T>,
-    /// The IMU sample minus nominal bias and minus the estimate of each
-    /// flagged fault: what a flight controller can use instead of the raw one.
+    /// The IMU sample with the monitor's correction applied: what a flight
+    /// controller can use instead of the raw one.
     pub corrected_imu: ImuVec<T>,
     /// State estimate `[u, v, w, φ, θ, ψ]`.
     pub state: StateVec<T>,
     /// Its standard deviations.
     pub state_sigma: StateVec<T>,
+    /// Input and numerical health.
+    pub health: Health,
+    /// True when aiding was processed in this step.
+    pub updated: bool,
+    /// The monitor-specific part.
+    pub detail: X,
+}
+
+/// The UKF innovation monitor's report.
+pub type UkfReport<T> = Report<T, UkfDetail<T>>;
+/// The optimal two-stage UKF (OTSUKF) monitor's report.
+pub type OtsukfReport<T> = Report<T, OtsukfDetail<T>>;
+
+/// What only the UKF innovation monitor reports.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UkfDetail<T> {
+    /// Fault estimate by \[UKF\] §4 as written, for comparison with
+    /// [`Report::fault_estimate`] (corrected innovation mapping `M⁺ r̄`,
+    /// SPEC §6).
+    pub fault_estimate_as_written: ImuVec<T>,
     /// t statistic per innovation channel (0 where the window is not full).
     pub t_statistic: [T; NZ],
     /// Innovation-level t-test flags (sign of the innovation, not the fault).
     pub innovation_flags: [i8; NZ],
     /// The diagnostic records of the last aiding update.
     pub diag: [ChannelDiag<T>; NZ],
-    /// True when aiding was processed in this step.
-    pub updated: bool,
-    /// Input and numerical health.
-    pub health: Health,
     /// Covariance re-initialisations since start.
     pub covariance_resets: u32,
+    /// The learned variance inflation of each innovation channel's window
+    /// statistic (1 until learning ends, or when disabled; see
+    /// `UkfMonitorConfig::max_innovation_inflation`).
+    pub innovation_inflation: [T; NZ],
 }
 
-impl<T: Real> Default for Report<T> {
+/// What only the OTSUKF monitor reports.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OtsukfDetail<T> {
+    /// Standard deviation of the fault estimate.
+    pub fault_sigma: ImuVec<T>,
+    /// Everything the filter attributes to the IMU: `f̂` (nominal bias plus
+    /// fault).
+    pub total_bias: ImuVec<T>,
+}
+
+impl<T: Real> Default for UkfDetail<T> {
+    fn default() -> Self {
+        Self {
+            fault_estimate_as_written: ImuVec::zeros(),
+            t_statistic: [T::zero(); NZ],
+            innovation_flags: [0; NZ],
+            diag: [ChannelDiag::default(); NZ],
+            covariance_resets: 0,
+            innovation_inflation: [T::one(); NZ],
+        }
+    }
+}
+
+impl<T: Real> Default for OtsukfDetail<T> {
+    fn default() -> Self {
+        Self {
+            fault_sigma: ImuVec::zeros(),
+            total_bias: ImuVec::zeros(),
+        }
+    }
+}
+
+impl<T: Real, X: Default> Default for Report<T, X> {
     fn default() -> Self {
         Self {
             phase: Phase::Aligning,
             status: [ChannelState::NotMonitored; NU],
             fault_estimate: ImuVec::zeros(),
-            fault_estimate_as_written: ImuVec::zeros(),
             nominal_bias: ImuVec::zeros(),
             corrected_imu: ImuVec::zeros(),
             state: StateVec::zeros(),
             state_sigma: StateVec::zeros(),
-            t_statistic: [T::zero(); NZ],
-            innovation_flags: [0; NZ],
-            diag: [ChannelDiag::default(); NZ],
-            updated: false,
             health: Health::default(),
-            covariance_resets: 0,
+            updated: false,
+            detail: X::default(),
         }
+    }
+}
+
+impl<T, X> Report<T, X> {
+    /// The same report with its monitor-specific part mapped by `f`: how a
+    /// tool that handles either monitor brings both to one type.
+    pub fn map_detail<Y>(self, f: impl FnOnce(X) -> Y) -> Report<T, Y> {
+        Report {
+            phase: self.phase,
+            status: self.status,
+            fault_estimate: self.fault_estimate,
+            nominal_bias: self.nominal_bias,
+            corrected_imu: self.corrected_imu,
+            state: self.state,
+            state_sigma: self.state_sigma,
+            health: self.health,
+            updated: self.updated,
+            detail: f(self.detail),
+        }
+    }
+
+    /// True when any channel is reported faulty.
+    pub fn any_fault(&self) -> bool {
+        self.status
+            .iter()
+            .any(|s| matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative))
     }
 }

@@ -2,7 +2,7 @@
 //! called once per period with the measured `dt`.
 
 use super::{
-    ChannelState, ConfigError, Health, OtsukfMonitor, Phase, UkfMonitor, UkfMonitorConfig,
+    ChannelState, ConfigError, Health, OtsukfMonitor, Phase, Report, UkfMonitor, UkfMonitorConfig,
 };
 use crate::imu::Imu;
 use crate::model::{ImuVec, Measurement};
@@ -73,9 +73,22 @@ pub struct Verdict {
     pub health: Health,
 }
 
+impl<X> From<&Report<f32, X>> for Verdict {
+    /// The common fields of either monitor's report.
+    fn from(r: &Report<f32, X>) -> Self {
+        Self {
+            phase: r.phase,
+            status: r.status,
+            fault_estimate: r.fault_estimate,
+            corrected_imu: r.corrected_imu,
+            health: r.health,
+        }
+    }
+}
+
 /// A single-IMU monitor the periodic task can run: the UKF innovation
-/// monitor ([`UkfMonitor`]) or the optimal two-stage UKF
-/// ([`OtsukfMonitor`]).
+/// monitor ([`UkfMonitor`]) or the optimal two-stage UKF (OTSUKF,
+/// [`OtsukfMonitor`]).
 pub trait PeriodicMonitor {
     /// One period with the measured `dt` (a NaN sample means "no sample").
     fn step_period(&mut self, imu: &ImuVec<f32>, dt: f32, aiding: &Measurement<f32>) -> Verdict;
@@ -83,33 +96,19 @@ pub trait PeriodicMonitor {
 
 impl<const W: usize> PeriodicMonitor for UkfMonitor<f32, W> {
     fn step_period(&mut self, imu: &ImuVec<f32>, dt: f32, aiding: &Measurement<f32>) -> Verdict {
-        let r = self.step(imu, dt, aiding);
-        Verdict {
-            phase: r.phase,
-            status: r.status,
-            fault_estimate: r.fault_estimate,
-            corrected_imu: r.corrected_imu,
-            health: r.health,
-        }
+        Verdict::from(&self.step(imu, dt, aiding))
     }
 }
 
 impl PeriodicMonitor for OtsukfMonitor<f32> {
     fn step_period(&mut self, imu: &ImuVec<f32>, dt: f32, aiding: &Measurement<f32>) -> Verdict {
-        let r = self.step(imu, dt, aiding);
-        Verdict {
-            phase: r.phase,
-            status: r.status,
-            fault_estimate: r.fault_estimate,
-            corrected_imu: r.corrected_imu,
-            health: r.health,
-        }
+        Verdict::from(&self.step(imu, dt, aiding))
     }
 }
 
 /// The monitor task: an IMU driver and one [`PeriodicMonitor`] — by
 /// default the UKF innovation monitor; [`MonitorTask::with_monitor`] runs any
-/// other (e.g. the two-stage UKF, whose corrected sample removes the
+/// other (e.g. the OTSUKF, whose corrected sample removes the
 /// estimated fault continuously).
 #[derive(Debug)]
 pub struct MonitorTask<I, M = UkfMonitor<f32>> {

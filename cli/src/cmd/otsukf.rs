@@ -1,4 +1,4 @@
-//! `imu-fdi-sim otsukf`: The optimal two-stage UKF on S3 (s3: realistic sensors; s3-paper: the paper's noise, aiding at the IMU rate): SPEC §9 RMSE over seeds, beside the 12-state augmented UKF and the paper's numbers.
+//! `imu-fdi-sim otsukf`: The optimal two-stage UKF (OTSUKF) on S3 (s3: realistic sensors; s3-paper: the paper's noise, aiding at the IMU rate): SPEC §9 RMSE over seeds, beside the 12-state augmented UKF and the paper's numbers.
 
 use anyhow::{anyhow, Result};
 
@@ -20,7 +20,7 @@ pub(crate) struct Args {
     /// Also run the 12-state augmented UKF on the same seeds.
     #[arg(long)]
     augmented: bool,
-    /// Run the two-stage monitor in f32 (default f64).
+    /// Run the OTSUKF monitor in f32 (default f64).
     #[arg(long)]
     f32: bool,
     /// Q^f multiplier while a fault is tracked (1 = no adaptation: the
@@ -124,7 +124,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         } else {
             run_otsukf::<f64>(&scn, seed, tuning.config(&scn, setting))
         }
-        .ok_or_else(|| anyhow!("the two-stage monitor refused its configuration"))?;
+        .ok_or_else(|| anyhow!("the OTSUKF monitor refused its configuration"))?;
         two.merge(&acc);
         false_flags += ff;
         if augmented {

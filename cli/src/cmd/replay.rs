@@ -1,4 +1,4 @@
-//! `imu-fdi-sim replay`: Replay a SPEC §10 CSV through the monitor (default detector: run-time matrix + GLR).
+//! `imu-fdi-sim replay`: a SPEC §10 CSV, ULog or DataFlash log through a single-IMU monitor (`--monitor ukf|otsukf`), one output format for both.
 
 use std::path::PathBuf;
 
@@ -23,6 +23,18 @@ pub(crate) struct Args {
     /// JSON summary.
     #[arg(long)]
     summary: Option<PathBuf>,
+    /// The monitor run on every IMU: the UKF innovation monitor or the
+    /// optimal two-stage UKF (OTSUKF). Same output for both.
+    #[arg(long, value_enum, default_value_t = MonitorArg::Ukf)]
+    monitor: MonitorArg,
+    /// Bound of the UKF monitor's learned innovation inflation (1: off;
+    /// default 25 for the flight profile, 1 for the simulated one).
+    #[arg(long)]
+    max_inflation: Option<f64>,
+    /// Print the JSON summary (one object) on stdout; the human-readable
+    /// lines go to stderr.
+    #[arg(long)]
+    json: bool,
     /// With truth columns: seconds after a fault during which flags are not false alarms (2·L).
     #[arg(long, default_value_t = 4.4)]
     grace: f64,
@@ -76,6 +88,9 @@ pub(crate) fn run(args: Args) -> Result<()> {
         input,
         out,
         summary,
+        monitor,
+        max_inflation,
+        json,
         grace,
         gnss,
         att,
@@ -128,7 +143,19 @@ pub(crate) fn run(args: Args) -> Result<()> {
         learn_s: learn,
         vel_sigma,
         att_sigma,
+        monitor: monitor.into(),
+        max_inflation,
     };
+    // With --json, stdout carries only the JSON object.
+    macro_rules! note {
+        ($($arg:tt)*) => {{
+            if json {
+                eprintln!($($arg)*);
+            } else {
+                out!($($arg)*);
+            }
+        }};
+    }
     // A flight log is converted to the SPEC §10 CSV first.
     let is_log = input
         .extension()
@@ -149,7 +176,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
             att.as_deref(),
             &csv,
         )?;
-        out!(
+        note!(
                 "converted {}: {} rows of {} IMU(s) at {:.1} Hz, {} with GNSS velocity, {} with attitude",
                 input.display(),
                 c.rows,
@@ -183,7 +210,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
             e
         }
     })?;
-    out!(
+    note!(
             "replayed {} rows ({} skipped, {} IMU rows rejected) of {} IMU(s) at {:.1} Hz, t = {:.2}..{:.2} s; aiding {}, profile {}, monitoring from {:?} s ({} samples)",
             s.rows,
             s.skipped_rows,
@@ -213,20 +240,40 @@ pub(crate) fn run(args: Args) -> Result<()> {
         } else {
             String::new()
         };
-        out!(
-            "  {:<8} flagged {:>6} samples{common}, first at {:?} s{scored}",
+        note!(
+            "  {:<8} flagged {:>6} samples in {} events{common}, first at {:?} s{scored}",
             c.channel,
             c.flagged_samples,
+            c.flag_events,
             c.first_detection_s
         );
     }
     if let Some(p) = out {
-        out!("wrote {}", p.display());
+        note!("wrote {}", p.display());
     }
     if let Some(p) = summary {
-        out!("wrote {}", p.display());
+        note!("wrote {}", p.display());
+    }
+    if json {
+        out!("{}", serde_json::to_string_pretty(&s)?);
     }
     Ok(())
+}
+
+/// The monitor `replay` runs.
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum MonitorArg {
+    Ukf,
+    Otsukf,
+}
+
+impl From<MonitorArg> for imu_fdi_cli::eval::replay_monitor::MonitorKind {
+    fn from(m: MonitorArg) -> Self {
+        match m {
+            MonitorArg::Ukf => Self::Ukf,
+            MonitorArg::Otsukf => Self::Otsukf,
+        }
+    }
 }
 
 /// Replay tuning profile.

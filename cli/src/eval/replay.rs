@@ -5,71 +5,19 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 use imu_fdi::model::{AidingKind, ImuVec, MeasVec, Measurement, CHANNEL_NAMES};
-use imu_fdi::monitor::{Phase, UkfMonitor, UkfMonitorConfig};
+use imu_fdi::monitor::{Phase, UkfMonitorConfig};
 
-use hal_sim::scenario::Scenario;
-use hal_sim::sim::Simulator;
+use super::replay_monitor::{phase_name, MonitorKind, ReplayMonitor};
 
-const IMU_COLS: [&str; 6] = [
+pub use super::replay_sim::write_simulated;
+pub use super::replay_summary::{ChannelSummary, ReplaySummary};
+
+pub(crate) const IMU_COLS: [&str; 6] = [
     "imu0_ax", "imu0_ay", "imu0_az", "imu0_gx", "imu0_gy", "imu0_gz",
 ];
-const DVL_COLS: [&str; 3] = ["dvl_u", "dvl_v", "dvl_w"];
-const GNSS_COLS: [&str; 3] = ["gnss_vn", "gnss_ve", "gnss_vd"];
-const ATT_COLS: [&str; 3] = ["att_roll", "att_pitch", "att_yaw"];
-
-/// Per-channel summary of a replay.
-#[derive(Debug, Clone, Default, serde::Serialize)]
-pub struct ChannelSummary {
-    /// Channel name.
-    pub channel: String,
-    /// Samples flagged while monitoring (either sign).
-    pub flagged_samples: usize,
-    /// Time of the first flag, s.
-    pub first_detection_s: Option<f64>,
-    /// With truth columns: fault-active monitored samples.
-    pub fault_samples: Option<usize>,
-    /// With truth: of those, flagged with the right sign.
-    pub correct_samples: Option<usize>,
-    /// Of the flagged samples, those where every IMU of the file flagged
-    /// this channel at once: the aiding or the model, not this IMU (files
-    /// with two or more IMUs only).
-    pub common_mode_samples: usize,
-    /// With truth: fault-free monitored samples flagged.
-    pub false_alarm_samples: Option<usize>,
-    /// With truth: time of the first flag with the right sign during a fault, s.
-    pub first_correct_s: Option<f64>,
-}
-
-/// What a replay did.
-#[derive(Debug, Clone, Default, serde::Serialize)]
-pub struct ReplaySummary {
-    /// Input rows read.
-    pub rows: usize,
-    /// Rows skipped (non-increasing or missing time, unparsable values).
-    pub skipped_rows: usize,
-    /// Rows whose IMU sample the monitor rejected (NaN, out of range).
-    pub rejected_imu_rows: usize,
-    /// Aiding model detected from the columns.
-    pub aiding: String,
-    /// Tuning profile used (`Sim` or `Flight`).
-    pub profile: String,
-    /// IMU instances monitored.
-    pub imus: usize,
-    /// Median IMU rate of the rows replayed, Hz.
-    pub imu_rate_hz: f64,
-    /// First and last time replayed, s.
-    pub span_s: (f64, f64),
-    /// IMU 0's process-noise PSD `[a_x … r]` ((m/s²)²/Hz, (rad/s)²/Hz).
-    pub process_noise_psd: Vec<f64>,
-    /// Measurement σ `[v×3 (m/s), roll, pitch, yaw (rad)]`.
-    pub meas_sigma: Vec<f64>,
-    /// Time monitoring started, s.
-    pub monitoring_from_s: Option<f64>,
-    /// Rows IMU 0's monitor spent monitoring.
-    pub monitored_samples: usize,
-    /// Per channel.
-    pub channels: Vec<ChannelSummary>,
-}
+pub(crate) const DVL_COLS: [&str; 3] = ["dvl_u", "dvl_v", "dvl_w"];
+pub(crate) const GNSS_COLS: [&str; 3] = ["gnss_vn", "gnss_ve", "gnss_vd"];
+pub(crate) const ATT_COLS: [&str; 3] = ["att_roll", "att_pitch", "att_yaw"];
 
 fn parse_opt(rec: &csv::StringRecord, idx: Option<usize>) -> Option<f64> {
     let s = rec.get(idx?)?.trim();
@@ -114,6 +62,11 @@ pub struct ReplayOptions {
     pub vel_sigma: f64,
     /// Flight profile: attitude σ (roll, pitch, yaw), rad.
     pub att_sigma: [f64; 3],
+    /// The monitor to run on every IMU.
+    pub monitor: MonitorKind,
+    /// Bound of the learned innovation inflation (UKF monitor; 1 disables;
+    /// None: 25 for the flight profile, 1 for the simulated one).
+    pub max_inflation: Option<f64>,
 }
 
 impl Default for ReplayOptions {
@@ -129,6 +82,8 @@ impl Default for ReplayOptions {
             learn_s: None,
             vel_sigma: 0.3,
             att_sigma: [1.0 * deg, 1.0 * deg, 10.0 * deg],
+            monitor: MonitorKind::Ukf,
+            max_inflation: None,
         }
     }
 }
@@ -177,6 +132,10 @@ pub fn flight_config(
     }
     c.imu_period = dt;
     c.learn_s = opts.learn_s.unwrap_or(20.0);
+    // Real aiding errors are time-correlated: learn the t statistic's
+    // inflation on the flight's own healthy start (bounded: a fault up to
+    // √25 = 5× the white-noise detectable size is still found).
+    c.max_innovation_inflation = opts.max_inflation.unwrap_or(25.0);
     c
 }
 
@@ -193,6 +152,9 @@ pub fn replay(
     replay_observed(input, out, summary, sim_cfg, opts, &mut |_, _| {})
 }
 
+/// One row's report of one IMU's monitor, as the replay hands it on.
+pub type ReplayReport = imu_fdi::monitor::Report<f64, super::replay_monitor::ReplayDetail>;
+
 /// [`replay`], calling `observe(t, reports)` after every row with the
 /// report of each IMU's monitor (the flight report plots these).
 pub fn replay_observed(
@@ -201,7 +163,7 @@ pub fn replay_observed(
     summary: Option<&Path>,
     sim_cfg: impl Fn(AidingKind) -> UkfMonitorConfig<f64>,
     opts: &ReplayOptions,
-    observe: &mut dyn FnMut(f64, &[imu_fdi::monitor::Report<f64>]),
+    observe: &mut dyn FnMut(f64, &[ReplayReport]),
 ) -> Result<ReplaySummary> {
     let (mut rdr, headers) = crate::io::log_import::open_csv(input)?;
     let col: HashMap<&str, usize> = headers.iter().enumerate().map(|(i, h)| (h, i)).collect();
@@ -245,6 +207,7 @@ pub fn replay_observed(
     let file_truth = truth_idx.iter().any(Option::is_some);
 
     let mut sum = ReplaySummary {
+        monitor: opts.monitor,
         aiding: format!("{kind:?}"),
         ..Default::default()
     };
@@ -396,6 +359,9 @@ pub fn replay_observed(
                 if let Some(l) = opts.learn_s {
                     c.learn_s = l;
                 }
+                if let Some(m) = opts.max_inflation {
+                    c.max_innovation_inflation = m;
+                }
                 c
             }
         };
@@ -404,10 +370,7 @@ pub fn replay_observed(
             sum.process_noise_psd = cfg.process_noise.psd.iter().copied().collect();
             sum.meas_sigma = cfg.meas_sigma.iter().copied().collect();
         }
-        monitors.push(
-            UkfMonitor::<f64>::new(cfg)
-                .map_err(|e| anyhow::anyhow!("invalid monitor configuration: {e:?}"))?,
-        );
+        monitors.push(ReplayMonitor::new(opts.monitor, cfg)?);
     }
     let has_truth: Vec<bool> = (0..imu_idx.len())
         .map(|k| {
@@ -423,6 +386,7 @@ pub fn replay_observed(
                 fault_samples: ht.then_some(0),
                 correct_samples: ht.then_some(0),
                 false_alarm_samples: ht.then_some(0),
+                false_alarm_events: ht.then_some(0),
                 ..Default::default()
             })
         })
@@ -440,19 +404,22 @@ pub fn replay_observed(
         for s in ["x_u", "x_v", "x_w", "x_roll", "x_pitch", "x_yaw"] {
             h.push(s.into());
         }
+        // One layout for both monitors: `fsig_*` (the fault estimate's σ)
+        // is empty where the monitor does not estimate it (UKF monitor).
         for k in 0..imu_idx.len() {
-            for c in CHANNEL_NAMES {
-                h.push(channel_name(k, &format!("flag_{c}")));
-            }
-            for c in CHANNEL_NAMES {
-                h.push(channel_name(k, &format!("fhat_{c}")));
+            h.push(channel_name(k, "phase"));
+            for prefix in ["flag", "fhat", "fsig"] {
+                for c in CHANNEL_NAMES {
+                    h.push(channel_name(k, &format!("{prefix}_{c}")));
+                }
             }
         }
         w.write_record(&h)?;
     }
     let mut last_fault_t = vec![f64::NEG_INFINITY; imu_idx.len()];
     let mut prev_t: Option<f64> = None;
-    for row in &rows {
+    for (row_index, row) in rows.iter().enumerate() {
+        let row_is_last = row_index + 1 == rows.len();
         let t = row.t;
         let step_dt = prev_t.map_or(dt, |p| t - p);
         prev_t = Some(t);
@@ -470,7 +437,7 @@ pub fn replay_observed(
                 m.step(&imu, step_dt, &meas)
             })
             .collect();
-        let raised = |r: &imu_fdi::monitor::Report<f64>, i: usize| {
+        let raised = |r: &imu_fdi::monitor::Report<f64, _>, i: usize| {
             r.phase == Phase::Monitoring
                 && r.status
                     .get(i)
@@ -502,6 +469,11 @@ pub fn replay_observed(
             for (i, ch) in sum.channels.iter_mut().skip(6 * k).take(6).enumerate() {
                 let flag = r.status.get(i).and_then(|s| s.sign());
                 let flagged = flag.is_some_and(|f| f != 0);
+                let rising = flagged && r.phase == Phase::Monitoring && !ch.was_flagged;
+                ch.was_flagged = flagged && r.phase == Phase::Monitoring;
+                if rising {
+                    ch.flag_events += 1;
+                }
                 if flagged && r.phase == Phase::Monitoring {
                     ch.flagged_samples += 1;
                     ch.first_detection_s.get_or_insert(t);
@@ -520,30 +492,51 @@ pub fn replay_observed(
                             f == if fv > 0.0 { 1 } else { -1 }
                         };
                         *ch.correct_samples.get_or_insert(0) += usize::from(correct);
+                        if r.phase == Phase::Monitoring && fv.is_finite() {
+                            let e = r.fault_estimate.get(i).copied().unwrap_or(0.0) - fv;
+                            ch.fault_sq_sum += e * e;
+                            ch.fault_rmse_n += 1;
+                        }
                         if correct {
                             ch.first_correct_s.get_or_insert(t);
                         }
                     } else if !any_fault && !in_grace && flagged {
                         *ch.false_alarm_samples.get_or_insert(0) += 1;
+                        if rising {
+                            *ch.false_alarm_events.get_or_insert(0) += 1;
+                        }
                     }
                 }
             }
-            cells.push((r.status, r.fault_estimate));
+            if let (Some(inf), true) = (r.detail.innovation_inflation, row_is_last) {
+                sum.innovation_inflation.push(inf);
+            }
+            cells.push((r.phase, r.status, r.fault_estimate, r.detail.fault_sigma));
         }
         if let Some(w) = writer.as_mut() {
-            for (status, fhat) in &cells {
+            for (phase, status, fhat, fsig) in &cells {
+                record.push(phase_name(*phase).to_string());
                 record.extend(
                     status
                         .iter()
                         .map(|s| s.sign().map_or(String::new(), |v| v.to_string())),
                 );
                 record.extend(fhat.iter().map(|v| format!("{v}")));
+                match fsig {
+                    Some(s) => record.extend(s.iter().map(|v| format!("{v}"))),
+                    None => record.extend(std::iter::repeat_n(String::new(), 6)),
+                }
             }
             w.write_record(&record)?;
         }
     }
     if let Some(mut w) = writer {
         w.flush()?;
+    }
+    for ch in &mut sum.channels {
+        if ch.fault_rmse_n > 0 {
+            ch.fault_rmse_si = Some((ch.fault_sq_sum / ch.fault_rmse_n as f64).sqrt());
+        }
     }
     sum.imus = imu_idx.len();
     sum.span_s = (
@@ -555,54 +548,4 @@ pub fn replay_observed(
             .with_context(|| format!("cannot write {}", p.display()))?;
     }
     Ok(sum)
-}
-
-/// Writes a simulated run in the SPEC §10 input format, with truth columns
-/// (`fault_imu0_*`, `truth_*`) that `replay` scores against.
-pub fn write_simulated(scn: &Scenario, seed: u64, path: &Path) -> Result<u64> {
-    let mut w =
-        csv::Writer::from_path(path).with_context(|| format!("cannot write {}", path.display()))?;
-    let vel = match scn.aiding.kind {
-        AidingKind::DvlCompass => DVL_COLS,
-        AidingKind::GnssAttitude => GNSS_COLS,
-    };
-    let mut h: Vec<String> = vec!["t".into()];
-    h.extend(IMU_COLS.iter().map(|s| s.to_string()));
-    h.extend(vel.iter().map(|s| s.to_string()));
-    h.extend(ATT_COLS.iter().map(|s| s.to_string()));
-    h.extend(CHANNEL_NAMES.iter().map(|c| format!("fault_imu0_{c}")));
-    h.extend(
-        [
-            "truth_u",
-            "truth_v",
-            "truth_w",
-            "truth_roll",
-            "truth_pitch",
-            "truth_yaw",
-        ]
-        .iter()
-        .map(|s| s.to_string()),
-    );
-    w.write_record(&h)?;
-    let mut n = 0;
-    for s in Simulator::new(scn, seed) {
-        let mut row = vec![format!("{:.4}", s.t)];
-        match s.imu {
-            Some(v) => row.extend(v.iter().map(|x| format!("{x:.9e}"))),
-            None => row.extend(std::iter::repeat_n(String::new(), 6)),
-        }
-        for i in 0..6 {
-            row.push(if s.aiding_available[i] {
-                format!("{:.9e}", s.aiding[i])
-            } else {
-                String::new()
-            });
-        }
-        row.extend(s.fault.iter().map(|x| format!("{x:.9e}")));
-        row.extend(s.truth.state.iter().map(|x| format!("{x:.9e}")));
-        w.write_record(&row)?;
-        n += 1;
-    }
-    w.flush()?;
-    Ok(n)
 }

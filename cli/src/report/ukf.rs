@@ -10,6 +10,7 @@
 
 use std::path::Path;
 
+use crate::eval::replay_monitor::ReplayDetail;
 use anyhow::Result;
 use imu_fdi::model::AidingKind;
 use imu_fdi::monitor::{ChannelState, Phase, Report};
@@ -77,7 +78,7 @@ impl Track {
         }
     }
 
-    fn see(&mut self, t: f64, r: &Report<f64>) {
+    fn see(&mut self, t: f64, r: &Report<f64, ReplayDetail>) {
         let dt = self.last_t.map_or(0.0, |p| t - p);
         self.last_t = Some(t);
         let monitoring = r.phase == Phase::Monitoring;
@@ -153,12 +154,9 @@ impl Track {
 }
 
 /// The innovations and their variances `S_ii` of the last aiding update
-/// (NaN for a channel that was absent). UKF-monitor specific.
-fn innovations(r: &Report<f64>) -> [(f64, f64); 6] {
-    core::array::from_fn(|i| match r.diag.get(i) {
-        Some(d) if d.available => (d.innovation, d.variance),
-        _ => (f64::NAN, f64::NAN),
-    })
+/// (NaN for a channel that was absent or a monitor without them).
+fn innovations(r: &Report<f64, ReplayDetail>) -> [(f64, f64); 6] {
+    r.detail.innovations.unwrap_or([(f64::NAN, f64::NAN); 6])
 }
 
 /// A short name of the input-health conditions of one step, if any.
@@ -213,7 +211,7 @@ pub fn add(csv: &Path, imus: usize, report: &mut FlightReport) -> Result<()> {
                 tr.see(t, r);
             }
             for (i, c) in common.iter_mut().enumerate() {
-                let flagged = |r: &Report<f64>| {
+                let flagged = |r: &Report<f64, ReplayDetail>| {
                     r.phase == Phase::Monitoring
                         && r.status
                             .get(i)

@@ -145,7 +145,7 @@ fn monitor_matches_f64(name: &str) -> Result<(), &'static str> {
     Ok(())
 }
 
-/// The two-stage UKF monitor on S3 in `f32` (13 sigma points, GNSS
+/// The OTSUKF monitor on S3 in `f32` (13 sigma points, GNSS
 /// velocity + attitude, the fault filter): its fault estimate after 15 s
 /// (monitoring from 8 s, faults from 10 s) within 0.1 σ_f of the host's
 /// `f64`; prints the instruction cost of its monitoring steps.
@@ -162,7 +162,7 @@ fn otsukf_s3_matches_f64() -> Result<(), &'static str> {
             max = max.max(c);
         }
     })
-    .ok_or("two-stage monitor refused the configuration")?;
+    .ok_or("OTSUKF monitor refused the configuration")?;
     hprintln!(
         "two-stage UKF monitor (f32, S3 seed 1): per monitoring step mean {} max {} instructions; size {} bytes",
         sum / n.max(1),
@@ -549,7 +549,7 @@ fn profile() {
     );
     // The two-stage filter's own steps (the monitor adds the Jacobians,
     // Φ, F and Q^x of the predict, 2.6k, and the measurement Jacobian).
-    let mut ts = imu_fdi::filter::TwoStageUkf::<f32, 6, 13, 6>::new(
+    let mut ts = imu_fdi::filter::Otsukf::<f32, 6, 13, 6>::new(
         x,
         p,
         ImuVec::zeros(),

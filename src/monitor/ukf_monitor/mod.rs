@@ -5,10 +5,9 @@ use super::input::{
     aiding_in_range, check_period, in_range, lever_arm_rates, next_phase, saturated, usable_aiding,
     Period,
 };
-use super::{ChannelState, ConfigError, Health, Phase, Report, UkfMonitorConfig};
+use super::{ChannelState, ConfigError, Health, Phase, UkfMonitorConfig, UkfReport};
 use crate::detect::{
-    estimate_as_written, estimate_corrected, paper_matrix, test_flags, window_evidence,
-    DecisionRule, Detector, InnovationWindow, Persistence, Statistic, TTest, WindowEvidence,
+    paper_matrix, Detector, InnovationWindow, Persistence, Statistic, TTest,
     PAPER_MATRIX_AS_PRINTED, PAPER_MATRIX_CORRECTED,
 };
 use crate::filter::{ChannelDiag, Gate, Ukf, UkfError};
@@ -19,6 +18,7 @@ use crate::model::{
 };
 use crate::stats::normal_upper_quantile;
 
+mod detection;
 mod realign;
 
 /// Default window length (aiding epochs per t-test window).
@@ -65,6 +65,11 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     latest_variance: ImuVec<T>,
     nominal_bias: ImuVec<T>,
     learn_clock: T,
+    /// Learned variance inflation of each channel's t statistic (≥ 1).
+    inflation: [T; NZ],
+    /// Σ clipped t² and count over the learning phase, per channel.
+    inflation_sum: [T; NZ],
+    inflation_n: [T; NZ],
     persistence: Persistence<NZ>,
     paper_inv: Option<Mat6<T>>,
     phase: Phase,
@@ -77,7 +82,7 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     last_dt: T,
     delay_steps: usize,
     history: heapless::HistoryBuf<StateVec<T>, { MAX_DELAY_STEPS + 1 }>,
-    report: Report<T>,
+    report: UkfReport<T>,
 }
 
 impl<T: Real, const W: usize> UkfMonitor<T, W> {
@@ -120,6 +125,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             latest_variance: ImuVec::from_element(T::one()),
             nominal_bias: ImuVec::zeros(),
             learn_clock: T::zero(),
+            inflation: [T::one(); NZ],
+            inflation_sum: [T::zero(); NZ],
+            inflation_n: [T::zero(); NZ],
             persistence: Persistence::new(cfg.persistence),
             paper_inv,
             phase: Phase::Aligning,
@@ -132,7 +140,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             last_dt: cfg.imu_period,
             delay_steps: (cfg.aiding_delay_s / cfg.imu_period).round().to_f64() as usize,
             history: heapless::HistoryBuf::new(),
-            report: Report::default(),
+            report: UkfReport::default(),
             cfg,
         })
     }
@@ -168,9 +176,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     }
 
     /// One monitor period. Never panics; every anomaly is reported in
-    /// [`Report::health`].
+    /// [`Report::health`](super::Report::health).
     #[inline(never)] // one copy in the image, not one per caller (issue 17)
-    pub fn step(&mut self, imu: &ImuVec<T>, dt: T, aiding: &Measurement<T>) -> Report<T> {
+    pub fn step(&mut self, imu: &ImuVec<T>, dt: T, aiding: &Measurement<T>) -> UkfReport<T> {
         let mut health = Health::default();
         let mut updated = false;
 
@@ -417,7 +425,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 }
             }
         }
-        self.report.diag = out.diag;
+        self.report.detail.diag = out.diag;
         // (I − K H) X = X − K (H X), with H X already at hand.
         self.sensitivity -= out.gain * hx;
         // The correction moved the current state: shift the history with it so
@@ -446,142 +454,6 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.history = shifted;
     }
 
-    /// Row scale that turns a raw innovation into a window sample.
-    fn window_scale(&self) -> ImuVec<T> {
-        match self.cfg.statistic {
-            Statistic::Raw => ImuVec::from_element(T::one()),
-            Statistic::Whitened | Statistic::Normalized => {
-                self.latest_variance.map(|v| T::one() / v.sqrt_fast())
-            }
-        }
-    }
-
-    #[inline(never)] // own stack frame and one copy (issue 17)
-    fn after_update(&mut self, health: &Health) {
-        let dt_learn = self.phase_time - self.learn_clock;
-        self.learn_clock = self.phase_time;
-        // Instant estimate from the latest innovation of every channel; only
-        // computed when the learner or the drift tracker will use it.
-        let instant = |s: &Self| {
-            let w = s.latest_variance.map(|v| T::one() / v);
-            estimate_corrected(&s.signature, &w, &s.latest_innovation, &[true; NZ])
-        };
-        match self.phase {
-            Phase::Learning => {
-                if let Some(f) = instant(self) {
-                    let k = (dt_learn / self.cfg.learn_tau_s).min(T::one());
-                    self.nominal_bias += f * k;
-                }
-            }
-            Phase::Monitoring => {
-                self.detect(health);
-                let quiet = self.report.status.iter().all(|s| {
-                    !matches!(s, ChannelState::FaultNegative | ChannelState::FaultPositive)
-                }) && self
-                    .report
-                    .t_statistic
-                    .iter()
-                    .all(|t| t.abs() < self.t_threshold() * T::lit(0.5));
-                let estimate = if quiet { instant(self) } else { None };
-                if let Some(f) = estimate {
-                    let k = dt_learn / self.cfg.drift_tau_s;
-                    for ((b, df), lim) in self
-                        .nominal_bias
-                        .iter_mut()
-                        .zip(f.iter())
-                        .zip(self.cfg.drift_rate_limit.iter())
-                    {
-                        let step = *df * k;
-                        let cap = *lim * dt_learn;
-                        *b += step.max(-cap).min(cap);
-                    }
-                }
-            }
-            _ => {}
-        }
-        let cap = T::lit(MAX_NOMINAL_BIAS_FACTOR);
-        for (b, m) in self.nominal_bias.iter_mut().zip(self.cfg.min_fault.iter()) {
-            *b = b.max(-*m * cap).min(*m * cap);
-        }
-    }
-
-    fn detect(&mut self, _health: &Health) {
-        let threshold = self.t_threshold();
-        let WindowEvidence {
-            full,
-            tstat,
-            rbar,
-            weight,
-        } = window_evidence(&self.windows, self.cfg.statistic, self.cfg.outlier_k);
-        let flags = test_flags(&tstat, threshold);
-        let scale = self.window_scale();
-        let mut m_eff = self.signature;
-        for (i, s) in scale.iter().enumerate() {
-            let row = m_eff.row(i) * *s;
-            m_eff.set_row(i, &row);
-        }
-        let rule = DecisionRule {
-            detector: self.cfg.detector,
-            paper_inv: self.paper_inv.as_ref(),
-            min_fault: &self.cfg.min_fault,
-            threshold_fraction: self.cfg.threshold_fraction,
-            sign_deadband: self.cfg.sign_deadband,
-            glr_threshold: self.cfg.glr_threshold,
-            glr_relative: self.cfg.glr_relative,
-        };
-        let decision = rule.decide(&m_eff, &flags, &rbar, &weight);
-        let monitored = self.monitored(&full);
-        let mut masked = decision;
-        for (d, m) in masked.iter_mut().zip(monitored.iter()) {
-            if !*m {
-                *d = 0;
-            }
-        }
-        let out = self.persistence.update(&masked);
-        // Estimates from the window means.
-        let est =
-            estimate_corrected(&m_eff, &weight, &rbar, &monitored).unwrap_or_else(ImuVec::zeros);
-        let raw_mean = rbar.component_div(&scale.map(|s| if s > T::zero() { s } else { T::one() }));
-        let mut as_written =
-            estimate_as_written(&self.last_h, &self.last_input_b, self.last_dt, &raw_mean)
-                .unwrap_or_else(ImuVec::zeros);
-        for (v, m) in as_written.iter_mut().zip(monitored.iter()) {
-            if !*m {
-                *v = T::zero();
-            }
-        }
-        for ((st, mon), o) in self
-            .report
-            .status
-            .iter_mut()
-            .zip(monitored.iter())
-            .zip(out.iter())
-        {
-            *st = if !*mon {
-                ChannelState::NotMonitored
-            } else {
-                match *o {
-                    1 => ChannelState::FaultPositive,
-                    -1 => ChannelState::FaultNegative,
-                    _ => ChannelState::Healthy,
-                }
-            };
-        }
-        self.report.t_statistic = tstat;
-        self.report.innovation_flags = flags;
-        self.report.fault_estimate = est;
-        self.report.fault_estimate_as_written = as_written;
-    }
-
-    /// IMU channel j is monitored when the innovation channels carrying its
-    /// signature have full windows: the velocity triad for accelerometers,
-    /// the attitude triad for gyros.
-    fn monitored(&self, full: &[bool; NZ]) -> [bool; NZ] {
-        let vel = full.iter().take(3).all(|f| *f);
-        let att = full.iter().skip(3).all(|f| *f);
-        [vel, vel, vel, att, att, att]
-    }
-
     fn advance_phase(&mut self) {
         let next = next_phase(
             self.phase,
@@ -596,6 +468,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             }
             Some(Phase::Monitoring) => {
                 self.phase = Phase::Monitoring;
+                self.freeze_inflation();
                 for w in self.windows.iter_mut() {
                     w.clear();
                 }
@@ -606,7 +479,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     }
 
     #[inline(never)] // own stack frame and one copy (issue 17)
-    fn compose(&self, imu: &ImuVec<T>, health: Health, updated: bool) -> Report<T> {
+    fn compose(&self, imu: &ImuVec<T>, health: Health, updated: bool) -> UkfReport<T> {
         let mut r = self.report;
         r.phase = self.phase;
         if self.phase != Phase::Monitoring {
@@ -632,9 +505,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             }
         }
         r.corrected_imu = corrected;
-        r.covariance_resets = self.ukf.covariance_resets();
+        r.detail.covariance_resets = self.ukf.covariance_resets();
+        r.detail.innovation_inflation = self.inflation;
         if !updated {
-            r.diag = [ChannelDiag::default(); NZ];
+            r.detail.diag = [ChannelDiag::default(); NZ];
         }
         r
     }

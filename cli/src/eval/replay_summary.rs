@@ -1,0 +1,81 @@
+//! What a SPEC §10 replay reports: the JSON summary and its per-channel
+//! rows.
+
+use super::replay_monitor::MonitorKind;
+
+/// Per-channel summary of a replay.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct ChannelSummary {
+    /// Channel name.
+    pub channel: String,
+    /// Samples flagged while monitoring (either sign).
+    pub flagged_samples: usize,
+    /// Time of the first flag, s.
+    pub first_detection_s: Option<f64>,
+    /// Flag events while monitoring: runs of consecutive flagged samples
+    /// (an alarm raised, whatever its length, counts once).
+    pub flag_events: usize,
+    /// With truth: flag events that start on a fault-free monitored
+    /// sample outside the grace time (false-alarm events).
+    pub false_alarm_events: Option<usize>,
+    #[serde(skip)]
+    pub(crate) was_flagged: bool,
+    /// With truth columns: fault-active monitored samples.
+    pub fault_samples: Option<usize>,
+    /// With truth: of those, flagged with the right sign.
+    pub correct_samples: Option<usize>,
+    /// Of the flagged samples, those where every IMU of the file flagged
+    /// this channel at once: the aiding or the model, not this IMU (files
+    /// with two or more IMUs only).
+    pub common_mode_samples: usize,
+    /// With truth: fault-free monitored samples flagged.
+    pub false_alarm_samples: Option<usize>,
+    /// With truth: time of the first flag with the right sign during a fault, s.
+    pub first_correct_s: Option<f64>,
+    /// With truth: RMS error of the fault estimate over this channel's
+    /// fault-active monitored samples (SPEC §9), SI units: m/s² for the
+    /// accelerometer channels, rad/s for the gyro channels.
+    pub fault_rmse_si: Option<f64>,
+    /// Samples behind `fault_rmse_si`.
+    #[serde(skip)]
+    pub fault_rmse_n: usize,
+    #[serde(skip)]
+    pub(crate) fault_sq_sum: f64,
+}
+
+/// What a replay did.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct ReplaySummary {
+    /// The monitor replayed (`ukf` or `otsukf`).
+    pub monitor: MonitorKind,
+    /// Input rows read.
+    pub rows: usize,
+    /// Rows skipped (non-increasing or missing time, unparsable values).
+    pub skipped_rows: usize,
+    /// Rows whose IMU sample the monitor rejected (NaN, out of range).
+    pub rejected_imu_rows: usize,
+    /// Aiding model detected from the columns.
+    pub aiding: String,
+    /// Tuning profile used (`Sim` or `Flight`).
+    pub profile: String,
+    /// IMU instances monitored.
+    pub imus: usize,
+    /// Median IMU rate of the rows replayed, Hz.
+    pub imu_rate_hz: f64,
+    /// First and last time replayed, s.
+    pub span_s: (f64, f64),
+    /// IMU 0's process-noise PSD `[a_x … r]` ((m/s²)²/Hz, (rad/s)²/Hz).
+    pub process_noise_psd: Vec<f64>,
+    /// Measurement σ `[v×3 (m/s), roll, pitch, yaw (rad)]`.
+    pub meas_sigma: Vec<f64>,
+    /// Time monitoring started, s.
+    pub monitoring_from_s: Option<f64>,
+    /// Rows IMU 0's monitor spent monitoring.
+    pub monitored_samples: usize,
+    /// Per channel.
+    pub channels: Vec<ChannelSummary>,
+    /// Per IMU, the UKF monitor's learned inflation of each aiding
+    /// channel's t statistic `[v×3, roll, pitch, yaw]` (empty for the
+    /// OTSUKF).
+    pub innovation_inflation: Vec<[f64; 6]>,
+}

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Issue 15's log171 figures for one single-IMU monitor (ukf | otsukf): the
+# real flight (ArduPilot log171 extracts: IMU CSV + GPS velocity + attitude,
+# mapped by `replay`), cut at 235 s, each IMU monitored alone. Prints the
+# fault-free flag events per IMU, then for every IMU and axis a 2 °/s gyro
+# step and a 0.5 m/s² accelerometer step (positive, 150–170 s) and whether
+# it was flagged with the right sign within 10 s ("0.0s": already flagged
+# at onset). Needs python3.
+# Step sizes: ACC (m/s², default 0.5) and GYRO_DEG (°/s, default 2).
+# Usage: scripts/single-imu-log171.sh [ukf|otsukf] [extra replay options]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+MON=${1:-ukf}
+ACC=${ACC:-0.5}
+GYRO=$(python3 -c "import math; print(math.radians(${GYRO_DEG:-2}))")
+shift || true
+DATA=${DATA:-../shared/data}
+BIN=./target/release/imu-fdi-sim
+cargo build -q -p imu-fdi-cli --release --bin imu-fdi-sim
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
+LOG=(replay "$DATA/ap_log171_imu_3x.csv" --gnss "$DATA/ap_log171_gps_vel_ned.csv"
+  --att "$DATA/ap_log171_attitude_quat.csv" --from 80 --to 235 --monitor "$MON" "$@")
+$BIN "${LOG[@]}" --json 2>/dev/null >"$TMP/free.json"
+python3 - "$TMP/free.json" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+print(f"{s['monitor']}: log171 80–235 s, monitoring from {s['monitoring_from_s']} s")
+for k in range(s["imus"]):
+    ch = s["channels"][6 * k:6 * k + 6]
+    ev = sum(c["flag_events"] for c in ch)
+    per = ", ".join(f"{c['channel']} {c['flag_events']}" for c in ch if c["flag_events"])
+    print(f"  IMU{k} fault-free: {ev} flag events [{per or 'none'}]")
+PY
+ok=0; n=0
+for imu in 0 1 2; do
+  line="  IMU$imu steps:"
+  for k in 0 1 2 3 4 5; do
+    cat >"$TMP/f.toml" <<TOML
+[sizes]
+accel = [$ACC, 0.0, 0.0]
+gyro = [$GYRO, 0.0, 0.0]
+f_unit = [1.0, 0.017453292519943295]
+[[faults]]
+channel = $k
+start = 150.0
+end = 170.0
+kind = "E1"
+sign = 1.0
+TOML
+    $BIN "${LOG[@]}" --faults "$TMP/f.toml" --inject-imu $imu --json 2>/dev/null >"$TMP/inj.json"
+    r=$(python3 -c '
+import json,sys
+s=json.load(open(sys.argv[1])); i=6*int(sys.argv[2])+int(sys.argv[3])
+c=s["channels"][i]; d=c["first_correct_s"]
+print(("%s %.1fs" % (c["channel"].split("_")[-1], d-150.0)) if d is not None and d-150.0<=10.0 else "%s MISS" % c["channel"].split("_")[-1])
+' "$TMP/inj.json" $imu $k)
+    line+=" $r"; n=$((n+1)); [[ $r == *MISS* ]] || ok=$((ok+1))
+  done
+  echo "$line"
+done
+echo "  steps detected within 10 s: $ok/$n"

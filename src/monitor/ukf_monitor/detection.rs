@@ -1,0 +1,227 @@
+//! The monitoring half of the UKF innovation monitor, run after each aiding
+//! update: nominal-bias learning and drift tracking, the windowed t-tests,
+//! the decision rule and the fault estimates.
+
+use super::{UkfMonitor, MAX_NOMINAL_BIAS_FACTOR};
+use crate::detect::{
+    estimate_as_written, estimate_corrected, test_flags, window_evidence, DecisionRule, Statistic,
+    WindowEvidence,
+};
+use crate::math::Real;
+use crate::model::{ImuVec, NZ};
+use crate::monitor::{ChannelState, Health, Phase};
+
+impl<T: Real, const W: usize> UkfMonitor<T, W> {
+    /// Row scale that turns a raw innovation into a window sample.
+    fn window_scale(&self) -> ImuVec<T> {
+        match self.cfg.statistic {
+            Statistic::Raw => ImuVec::from_element(T::one()),
+            Statistic::Whitened | Statistic::Normalized => {
+                self.latest_variance.map(|v| T::one() / v.sqrt_fast())
+            }
+        }
+    }
+
+    #[inline(never)] // own stack frame and one copy (issue 17)
+    pub(super) fn after_update(&mut self, health: &Health) {
+        let dt_learn = self.phase_time - self.learn_clock;
+        self.learn_clock = self.phase_time;
+        // Instant estimate from the latest innovation of every channel; only
+        // computed when the learner or the drift tracker will use it.
+        let instant = |s: &Self| {
+            let w = s.latest_variance.map(|v| T::one() / v);
+            estimate_corrected(&s.signature, &w, &s.latest_innovation, &[true; NZ])
+        };
+        match self.phase {
+            Phase::Learning => {
+                self.learn_inflation();
+                if let Some(f) = instant(self) {
+                    let k = (dt_learn / self.cfg.learn_tau_s).min(T::one());
+                    self.nominal_bias += f * k;
+                }
+            }
+            Phase::Monitoring => {
+                self.detect(health);
+                let quiet = self.report.status.iter().all(|s| {
+                    !matches!(s, ChannelState::FaultNegative | ChannelState::FaultPositive)
+                }) && self
+                    .report
+                    .detail
+                    .t_statistic
+                    .iter()
+                    .all(|t| t.abs() < self.t_threshold() * T::lit(0.5));
+                let estimate = if quiet { instant(self) } else { None };
+                if let Some(f) = estimate {
+                    let k = dt_learn / self.cfg.drift_tau_s;
+                    for ((b, df), lim) in self
+                        .nominal_bias
+                        .iter_mut()
+                        .zip(f.iter())
+                        .zip(self.cfg.drift_rate_limit.iter())
+                    {
+                        let step = *df * k;
+                        let cap = *lim * dt_learn;
+                        *b += step.max(-cap).min(cap);
+                    }
+                }
+            }
+            _ => {}
+        }
+        let cap = self
+            .cfg
+            .max_nominal_bias
+            .unwrap_or_else(|| self.cfg.min_fault * T::lit(MAX_NOMINAL_BIAS_FACTOR));
+        for (b, m) in self.nominal_bias.iter_mut().zip(cap.iter()) {
+            *b = b.max(-*m).min(*m);
+        }
+    }
+
+    fn detect(&mut self, _health: &Health) {
+        let threshold = self.t_threshold();
+        let WindowEvidence {
+            full,
+            tstat,
+            rbar,
+            weight,
+        } = window_evidence(&self.windows, self.cfg.statistic, self.cfg.outlier_k);
+        // The learned inflation: the test and the GLR weigh each window mean
+        // by the spread it has on this vehicle's healthy data.
+        let mut tstat = tstat;
+        let mut weight = weight;
+        for ((t, w), c) in tstat
+            .iter_mut()
+            .zip(weight.iter_mut())
+            .zip(self.inflation.iter())
+        {
+            *t /= c.sqrt_fast();
+            *w /= *c;
+        }
+        let flags = test_flags(&tstat, threshold);
+        let scale = self.window_scale();
+        let mut m_eff = self.signature;
+        for (i, s) in scale.iter().enumerate() {
+            let row = m_eff.row(i) * *s;
+            m_eff.set_row(i, &row);
+        }
+        let rule = DecisionRule {
+            detector: self.cfg.detector,
+            paper_inv: self.paper_inv.as_ref(),
+            min_fault: &self.cfg.min_fault,
+            threshold_fraction: self.cfg.threshold_fraction,
+            sign_deadband: self.cfg.sign_deadband,
+            glr_threshold: self.cfg.glr_threshold,
+            glr_relative: self.cfg.glr_relative,
+        };
+        let decision = rule.decide(&m_eff, &flags, &rbar, &weight);
+        let monitored = self.monitored(&full);
+        let mut masked = decision;
+        for (d, m) in masked.iter_mut().zip(monitored.iter()) {
+            if !*m {
+                *d = 0;
+            }
+        }
+        let out = self.persistence.update(&masked);
+        // Estimates from the window means.
+        let est =
+            estimate_corrected(&m_eff, &weight, &rbar, &monitored).unwrap_or_else(ImuVec::zeros);
+        let raw_mean = rbar.component_div(&scale.map(|s| if s > T::zero() { s } else { T::one() }));
+        let mut as_written =
+            estimate_as_written(&self.last_h, &self.last_input_b, self.last_dt, &raw_mean)
+                .unwrap_or_else(ImuVec::zeros);
+        for (v, m) in as_written.iter_mut().zip(monitored.iter()) {
+            if !*m {
+                *v = T::zero();
+            }
+        }
+        for ((st, mon), o) in self
+            .report
+            .status
+            .iter_mut()
+            .zip(monitored.iter())
+            .zip(out.iter())
+        {
+            *st = if !*mon {
+                ChannelState::NotMonitored
+            } else {
+                match *o {
+                    1 => ChannelState::FaultPositive,
+                    -1 => ChannelState::FaultNegative,
+                    _ => ChannelState::Healthy,
+                }
+            };
+        }
+        self.report.detail.t_statistic = tstat;
+        self.report.detail.innovation_flags = flags;
+        self.report.fault_estimate = est;
+        self.report.detail.fault_estimate_as_written = as_written;
+    }
+
+    /// Accumulates each full window's t² during learning, clipped at 10²
+    /// so one glitch (a 60 ms spike, an aiding jump) moves the mean by at
+    /// most 100/n.
+    fn learn_inflation(&mut self) {
+        if self.cfg.max_innovation_inflation <= T::one() {
+            return;
+        }
+        let ev = window_evidence(&self.windows, self.cfg.statistic, self.cfg.outlier_k);
+        let clip = T::lit(100.0);
+        for (((s, n), t), full) in self
+            .inflation_sum
+            .iter_mut()
+            .zip(self.inflation_n.iter_mut())
+            .zip(ev.tstat.iter())
+            .zip(ev.full.iter())
+        {
+            if *full {
+                *s += (*t * *t).min(clip);
+                *n += T::one();
+            }
+        }
+    }
+
+    /// At the end of learning: inflation = what the data prove of mean t²
+    /// over its white-noise value. For ν = W − 1 the white t has
+    /// `E[t²] = ν/(ν−2)` and `Var[t²] = 3ν²/((ν−2)(ν−4)) − E[t²]²` (normal:
+    /// 1 and 2); the learning gave `n` overlapping windows, i.e. about
+    /// `n/W` independent ones. The factor is the one-sided 97.7 % lower
+    /// bound `(mean − 2·sd/√(n/W)) / E[t²]`, clamped to
+    /// `[1, max_innovation_inflation]`: sampling noise of a short learning
+    /// phase on white data gives 1, not a desensitised test. Channels with
+    /// fewer than 2·W windows keep 1.
+    pub(super) fn freeze_inflation(&mut self) {
+        let nu = W.saturating_sub(1) as f64;
+        let (white, var) = match self.cfg.statistic {
+            Statistic::Normalized => (1.0, 2.0),
+            _ if nu > 4.0 => {
+                let e2 = nu / (nu - 2.0);
+                (e2, 3.0 * nu * nu / ((nu - 2.0) * (nu - 4.0)) - e2 * e2)
+            }
+            _ => return,
+        };
+        let (white, sd) = (T::lit(white), T::lit(var).sqrt_fast());
+        let w = T::lit(W as f64);
+        let max = self.cfg.max_innovation_inflation;
+        for ((c, s), n) in self
+            .inflation
+            .iter_mut()
+            .zip(self.inflation_sum.iter())
+            .zip(self.inflation_n.iter())
+        {
+            *c = if *n >= T::lit(2.0) * w {
+                let lower = *s / *n - T::lit(2.0) * sd / (*n / w).sqrt_fast();
+                (lower / white).max(T::one()).min(max)
+            } else {
+                T::one()
+            };
+        }
+    }
+
+    /// IMU channel j is monitored when the innovation channels carrying its
+    /// signature have full windows: the velocity triad for accelerometers,
+    /// the attitude triad for gyros.
+    fn monitored(&self, full: &[bool; NZ]) -> [bool; NZ] {
+        let vel = full.iter().take(3).all(|f| *f);
+        let att = full.iter().skip(3).all(|f| *f);
+        [vel, vel, vel, att, att, att]
+    }
+}
