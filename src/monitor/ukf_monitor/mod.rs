@@ -248,6 +248,15 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
 
         // --- measurement update --------------------------------------------
         let meas_ok = aiding.any();
+        // Through ±90° (a loop, a tumble): the attitude is re-aligned from
+        // the aiding instead of staying singular (issue 16).
+        if health.pitch_singular && meas_ok {
+            let omega = lever_arm_rates(in_range, &(imu - self.nominal_bias));
+            if self.recover_singular(aiding, &omega) {
+                health.aiding_realigned = true;
+                health.covariance_reset = true;
+            }
+        }
         if meas_ok && !health.pitch_singular {
             let omega = lever_arm_rates(in_range, &(imu - self.nominal_bias));
             let (aiding, realigned) = self.realign_outliers(aiding, &omega);
