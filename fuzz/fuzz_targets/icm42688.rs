@@ -49,7 +49,7 @@ impl embedded_hal::delay::DelayNs for NoDelay {
 }
 
 fuzz_target!(|data: &[u8]| {
-    let mut spi = FuzzSpi {
+    let spi = FuzzSpi {
         bytes: Bytes::new(data),
     };
     // The identity check wants 0x47 twice: libFuzzer's comparison tracing

@@ -190,7 +190,7 @@ impl<T: Real> OtsukfMonitor<T> {
         let omega = lever_arm_rates(usable, &u_corr);
         if self.phase == Phase::Aligning {
             self.try_align(aiding, &omega);
-            return self.compose(imu, health, false);
+            return self.compose(&u_meas, health, false);
         }
         if dt_ok {
             match self.predict(&u_corr, dt) {
@@ -222,7 +222,9 @@ impl<T: Real> OtsukfMonitor<T> {
         if self.phase == Phase::Monitoring {
             self.decide(self.holdoff <= T::zero());
         }
-        self.compose(imu, health, updated)
+        // An unusable sample is not passed on: the corrected sample is the
+        // stand-in the filter used (never NaN).
+        self.compose(&u_meas, health, updated)
     }
 
     /// The two-stage update with the outlier gate; true when applied.

@@ -221,7 +221,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         if self.phase == Phase::Aligning {
             let omega = lever_arm_rates(in_range, imu);
             self.try_align(aiding, &omega);
-            self.report = self.compose(imu, health, false);
+            let shown = if in_range { imu } else { &self.prev_imu };
+            self.report = self.compose(shown, health, false);
             return self.report;
         }
 
@@ -287,7 +288,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             self.after_update(&health);
         }
         self.advance_phase();
-        self.report = self.compose(imu, health, updated);
+        // The corrected sample of an invalid one is the stand-in the filter
+        // used (the last good sample): no NaN reaches a flight controller.
+        let shown = if in_range { imu } else { &self.prev_imu };
+        self.report = self.compose(shown, health, updated);
         self.report
     }
 
