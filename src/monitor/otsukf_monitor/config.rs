@@ -4,7 +4,7 @@ use crate::math::Real;
 use crate::model::ImuVec;
 use crate::monitor::{ConfigError, UkfMonitorConfig};
 
-/// Configuration of [`OtsukfMonitor`].
+/// Configuration of [`OtsukfMonitor`](super::OtsukfMonitor).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OtsukfConfig<T> {
     /// Vehicle, sensors, aiding, start-up timing and minimum faults (the
