@@ -30,6 +30,8 @@ pub mod trajectory;
 #[cfg(feature = "std")]
 pub mod metrics;
 #[cfg(feature = "std")]
+pub mod recovery;
+#[cfg(feature = "std")]
 pub mod runner;
 
 pub use fault::{FaultKind, FaultRow, FaultSizes};

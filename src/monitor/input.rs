@@ -110,3 +110,38 @@ pub(crate) fn next_phase<T: Real>(
         _ => None,
     }
 }
+
+/// Consecutive identical in-range samples: a frozen output (SPEC §8a).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct FrozenCheck<T> {
+    prev: ImuVec<T>,
+    count: u16,
+}
+
+impl<T: Real> FrozenCheck<T> {
+    /// No sample seen.
+    pub fn new() -> Self {
+        Self {
+            prev: ImuVec::zeros(),
+            count: 0,
+        }
+    }
+
+    /// Counts `imu` (when in range); true once `limit` repeats are reached.
+    pub fn update(&mut self, imu: &ImuVec<T>, in_range: bool, limit: u16) -> bool {
+        if in_range {
+            if *imu == self.prev {
+                self.count = self.count.saturating_add(1);
+            } else {
+                self.count = 0;
+            }
+            self.prev = *imu;
+        }
+        self.count >= limit
+    }
+
+    /// The last in-range sample.
+    pub fn last(&self) -> &ImuVec<T> {
+        &self.prev
+    }
+}

@@ -5,6 +5,7 @@ mod align;
 mod config;
 mod input;
 mod otsukf_monitor;
+mod realign;
 mod report;
 mod task;
 mod ukf_monitor;

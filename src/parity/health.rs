@@ -59,6 +59,20 @@ pub enum SensorStatus {
 }
 
 impl SensorStatus {
+    /// The per-period status behind a bus or output failure
+    /// (`InvalidOutput` → `OutOfRange`, `Timeout` → `Missing`,
+    /// `BusFailure` → `BusError`); `None` for the others.
+    pub fn transient(self) -> Option<Self> {
+        match self {
+            Self::InvalidOutput => Some(Self::OutOfRange),
+            Self::Timeout => Some(Self::Missing),
+            Self::BusFailure => Some(Self::BusError),
+            _ => None,
+        }
+    }
+}
+
+impl SensorStatus {
     /// True for the latched states: the sensor is out of the set until
     /// [`reset`](super::ParityMonitor::reset).
     pub fn is_failed(self) -> bool {
@@ -138,14 +152,33 @@ impl<T: Real> SensorHealth<T> {
         reading: Reading<T>,
         cfg: &HealthConfig<T>,
     ) -> (Option<T>, SensorStatus) {
-        let (value, status) = self.classify(reading, cfg);
-        if let Some(failed) = self.latched {
-            return (None, failed);
-        }
+        let (value, status) = self.check_unlatched(reading, cfg);
         if status.is_failed() {
             self.latched = Some(status);
         }
         (value, status)
+    }
+
+    /// As [`check`](Self::check), but a new failure is not latched: the
+    /// caller decides (with [`latch`](Self::latch)) after seeing the other
+    /// sensors — a failure on most sensors at once is a common-mode event.
+    pub fn check_unlatched(
+        &mut self,
+        reading: Reading<T>,
+        cfg: &HealthConfig<T>,
+    ) -> (Option<T>, SensorStatus) {
+        let (value, status) = self.classify(reading, cfg);
+        if let Some(failed) = self.latched {
+            return (None, failed);
+        }
+        (value, status)
+    }
+
+    /// Latches `status` (a failure) until reset.
+    pub fn latch(&mut self, status: SensorStatus) {
+        if status.is_failed() {
+            self.latched = Some(status);
+        }
     }
 
     fn classify(

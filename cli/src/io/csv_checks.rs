@@ -150,10 +150,24 @@ pub fn parse_cell(path: &Path, line: usize, column: &str, cell: Option<&str>) ->
     }
     s.parse::<f64>().map_err(|_| {
         anyhow::anyhow!(
-            "{}: line {line}, column '{column}': '{s}' is not a number",
-            path.display()
+            "{}: line {line}, column '{}': '{}' is not a number",
+            path.display(),
+            quoted(column),
+            quoted(s)
         )
     })
+}
+
+/// Text from a file as it may appear in a one-line message: control
+/// characters escaped (a quoted CSV cell can hold newlines — found by the
+/// `csv_files` fuzz target), at most 40 characters.
+pub fn quoted(s: &str) -> String {
+    const MAX: usize = 40;
+    let mut out: String = s.chars().take(MAX).flat_map(char::escape_default).collect();
+    if s.chars().nth(MAX).is_some() {
+        out.push('…');
+    }
+    out
 }
 
 #[cfg(test)]
@@ -162,6 +176,20 @@ mod tests {
 
     fn times(step: f64) -> Vec<(usize, f64)> {
         (0..100).map(|k| (k + 2, k as f64 * step)).collect()
+    }
+
+    #[test]
+    fn a_cell_with_a_newline_gives_a_one_line_error() {
+        let p = Path::new("x.csv");
+        let e = parse_cell(p, 3, "imu0_gz", Some("0.1,\n60.0,")).unwrap_err();
+        let e = format!("{e:#}");
+        assert!(
+            !e.contains('\n') && e.contains("x.csv") && e.contains("line 3"),
+            "{e}"
+        );
+        let long = "9".repeat(100) + "x";
+        let e = format!("{:#}", parse_cell(p, 4, "t", Some(&long)).unwrap_err());
+        assert!(e.len() < 150 && e.ends_with("…' is not a number"), "{e}");
     }
 
     #[test]

@@ -229,7 +229,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         if self.phase == Phase::Aligning {
             let omega = lever_arm_rates(in_range, imu);
             self.try_align(aiding, &omega);
-            self.report = self.compose(imu, health, false);
+            let shown = if in_range { imu } else { &self.prev_imu };
+            self.report = self.compose(shown, health, false);
             return self.report;
         }
 
@@ -256,6 +257,15 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
 
         // --- measurement update --------------------------------------------
         let meas_ok = aiding.any();
+        // Through ±90° (a loop, a tumble): the attitude is re-aligned from
+        // the aiding instead of staying singular (issue 16).
+        if health.pitch_singular && meas_ok {
+            let omega = lever_arm_rates(in_range, &(imu - self.nominal_bias));
+            if self.recover_singular(aiding, &omega) {
+                health.aiding_realigned = true;
+                health.covariance_reset = true;
+            }
+        }
         if meas_ok && !health.pitch_singular {
             let omega = lever_arm_rates(in_range, &(imu - self.nominal_bias));
             let (aiding, realigned) = self.realign_outliers(aiding, &omega);
@@ -286,7 +296,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             self.after_update(&health);
         }
         self.advance_phase();
-        self.report = self.compose(imu, health, updated);
+        // The corrected sample of an invalid one is the stand-in the filter
+        // used (the last good sample): no NaN reaches a flight controller.
+        let shown = if in_range { imu } else { &self.prev_imu };
+        self.report = self.compose(shown, health, updated);
         self.report
     }
 

@@ -1,7 +1,12 @@
 //! Re-alignment to the aiding after a jump the outlier gate cannot follow
-//! (a GNSS or DVL glitch): the triad is re-initialised instead of fused.
+//! (a GNSS or DVL glitch), or when the attitude has reached the Euler
+//! singularity: the triad is re-initialised instead of fused (the shared
+//! rules are in `monitor/realign.rs`).
 
 use super::*;
+use crate::monitor::realign::{
+    realign_due, realigned_state, reset_covariance, singular_recoverable,
+};
 
 impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// The outlier gate rejects an aiding channel at most
@@ -25,66 +30,30 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         omega: &Vector3<T>,
     ) -> (Measurement<T>, bool) {
         let mut out = *aiding;
-        let limit = u16::from(self.cfg.gate_max_rejections);
         let predicted = self.meas.predict(self.ukf.state(), omega);
-        let mut due = [false; NZ];
-        for (i, d) in due.iter_mut().enumerate() {
-            let (Some(a), Some(z), Some(zp), Some(bound), Some(run), Some(fused)) = (
-                aiding.available.get(i),
-                aiding.z.get(i),
-                predicted.get(i),
-                self.cfg.realign_innovation.get(i),
-                self.rejection_run.get(i),
-                self.since_fused.get(i),
-            ) else {
-                continue;
-            };
-            // Only a jump of a channel in use: aiding that returns (or first
-            // arrives) after more than `aiding_timeout_s` is fused as before.
-            let recent = *fused <= self.cfg.aiding_timeout_s;
-            let mut innovation = *z - *zp;
-            if i >= ROLL {
-                innovation = wrap_pi(innovation);
-            }
-            *d = *a
-                && recent
-                && *run >= limit
-                && (!innovation.finite() || innovation.abs() > *bound);
-        }
+        let due = realign_due(
+            aiding,
+            &predicted,
+            &self.cfg.realign_innovation,
+            &self.rejection_run,
+            &self.since_fused,
+            u16::from(self.cfg.gate_max_rejections),
+            self.cfg.aiding_timeout_s,
+        );
         if !due.iter().any(|d| *d) {
             return (out, false);
         }
         let vel_due = due.iter().take(3).any(|d| *d);
         let att_due = due.iter().skip(ROLL).any(|d| *d);
-        let complete = |r: core::ops::Range<usize>| {
-            aiding
-                .available
-                .get(r)
-                .is_some_and(|a| a.iter().all(|v| *v))
-        };
-        let mut x = *self.ukf.state();
-        let mut reset = [false; NX];
-        if att_due && complete(ROLL..NZ) {
-            let mut xa = x;
-            xa.fixed_rows_mut::<3>(ROLL)
-                .copy_from(&aiding.z.fixed_rows::<3>(ROLL));
-            if self.model.check_attitude(&xa).is_ok() {
-                x = xa;
-                for r in reset.iter_mut().skip(ROLL) {
-                    *r = true;
-                }
-            }
-        }
-        if vel_due && complete(0..3) {
-            let v: Vector3<T> = aiding.z.fixed_rows::<3>(0).into_owned();
-            let v_imu = self.meas.velocity_to_body(&x, &v) - omega.cross(&self.meas.lever_arm);
-            if v_imu.iter().all(|c| c.finite()) {
-                x.fixed_rows_mut::<3>(0).copy_from(&v_imu);
-                for r in reset.iter_mut().take(3) {
-                    *r = true;
-                }
-            }
-        }
+        let (x, reset) = realigned_state(
+            &self.model,
+            &self.meas,
+            self.ukf.state(),
+            aiding,
+            omega,
+            att_due,
+            vel_due,
+        );
         // Neither fused nor (when it could not be re-aligned) forgotten: an
         // outlying channel counts as one more rejection.
         for ((a, d), run) in out
@@ -107,20 +76,41 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 *a = false;
             }
         }
-        let mut p = *self.ukf.covariance();
-        for (i, ri) in reset.iter().enumerate() {
-            for (j, rj) in reset.iter().enumerate() {
-                if *ri || *rj {
-                    if let Some(v) = p.get_mut((i, j)) {
-                        *v = T::zero();
-                    }
-                }
-            }
-            if *ri {
-                let s = self.cfg.initial_sigma.get(i).copied().unwrap_or(T::one());
-                if let Some(v) = p.get_mut((i, i)) {
-                    *v = s * s;
-                }
+        self.apply_realignment(x, &reset);
+        (out, true)
+    }
+
+    /// At the Euler singularity (the prediction cannot run, `pitch_singular`)
+    /// the attitude — and the velocity when it arrived — is re-initialised
+    /// from an aiding epoch whose attitude is away from it (a loop or a
+    /// tumble has gone through ±90°), with the same restart of the
+    /// statistics as a re-alignment. True when it was.
+    pub(super) fn recover_singular(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>) -> bool {
+        if !singular_recoverable(&self.model, aiding) {
+            return false;
+        }
+        let (x, reset) = realigned_state(
+            &self.model,
+            &self.meas,
+            self.ukf.state(),
+            aiding,
+            omega,
+            true,
+            true,
+        );
+        if !reset.iter().skip(ROLL).all(|r| *r) {
+            return false;
+        }
+        self.apply_realignment(x, &reset);
+        true
+    }
+
+    /// Re-initialises the `reset` states to `x` with their initial
+    /// covariance, and restarts what depends on the state's history.
+    fn apply_realignment(&mut self, x: StateVec<T>, reset: &[bool; NX]) {
+        let p = reset_covariance(self.ukf.covariance(), reset, &self.cfg.initial_sigma);
+        for (i, r) in reset.iter().enumerate() {
+            if *r {
                 // The re-aligned state no longer depends on the fault history.
                 self.sensitivity.row_mut(i).fill(T::zero());
             }
@@ -139,6 +129,5 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         self.persistence.reset();
         self.stats_holdoff = self.stats_holdoff.max(self.cfg.converge_s);
-        (out, true)
     }
 }

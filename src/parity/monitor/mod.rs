@@ -261,8 +261,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let mut status = [SensorStatus::Healthy; N];
         let mut newly_failed = None;
         for (k, (reading, health)) in readings.iter().zip(self.health.iter_mut()).enumerate() {
-            let was_failed = health.failure().is_some();
-            let (value, s) = health.check(*reading, &self.cfg.health);
+            let (value, s) = health.check_unlatched(*reading, &self.cfg.health);
             if let (Some(x), Some(slot), Some(u)) = (value, m.get_mut(k), usable.get_mut(k)) {
                 *slot = x;
                 *u = true;
@@ -270,12 +269,34 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             if let Some(st) = status.get_mut(k) {
                 *st = s;
             }
-            if !was_failed && s.is_failed() && newly_failed.is_none() {
-                newly_failed = Some(k);
+        }
+        let in_set = self.removed.iter().filter(|r| !**r).count();
+        // Bus, timing or output failures on at least half of the sensors in
+        // the set at once (the shared bus, the power, the scheduler) are
+        // common-mode events, not sensor failures: nothing is latched,
+        // the sensors are reported with their per-period status and
+        // return when their samples do (issue 16: a bus-wide glitch used
+        // to latch every sensor and leave the monitor `Lost`).
+        let bus_like = self
+            .health
+            .iter()
+            .zip(status.iter())
+            .filter(|(h, s)| h.failure().is_none() && s.transient().is_some())
+            .count();
+        let common_bus = bus_like >= 2 && 2 * bus_like >= in_set;
+        for (k, (h, st)) in self.health.iter_mut().zip(status.iter_mut()).enumerate() {
+            if h.failure().is_some() || !st.is_failed() {
+                continue;
+            }
+            match st.transient() {
+                Some(t) if common_bus => *st = t,
+                _ => {
+                    h.latch(*st);
+                    newly_failed = newly_failed.or(Some(k));
+                }
             }
         }
         // Railed outputs: long clipping on a minority of sensors.
-        let in_set = self.removed.iter().filter(|r| !**r).count();
         let clipping = status
             .iter()
             .filter(|s| **s == SensorStatus::Clipping)

@@ -12,6 +12,10 @@ use super::super::space::ParitySpace;
 use super::super::training::{Baseline, Trainer};
 use super::{DetectorFlags, ParityMonitor, ParityPhase, ParityReport};
 
+/// Blocks a CUSUM alarm takes at most to clear once the bias is gone
+/// (5 s with the default 0.1-s blocks).
+const CUSUM_CLEAR_BLOCKS: f64 = 50.0;
+
 /// Derived per-space quantities (recomputed on reconfiguration).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Tests<T: Real, const N: usize> {
@@ -99,8 +103,15 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             else {
                 continue;
             };
-            *gp = (*gp + s - kappa).max(T::zero());
-            *gn = (*gn - s - kappa).max(T::zero());
+            // Page's CUSUM, held below `h + κ·CUSUM_CLEAR_BLOCKS`: the alarm
+            // is raised as before (at `h`), but once the bias is gone it
+            // clears within that many blocks (it decays by ≈ κ per block)
+            // instead of after as long as the excursion took to build —
+            // minutes after a gross transient (issue 16, found by the
+            // parity fuzz target).
+            let cap = h + kappa * T::lit(CUSUM_CLEAR_BLOCKS);
+            *gp = (*gp + s - kappa).max(T::zero()).min(cap);
+            *gn = (*gn - s - kappa).max(T::zero()).min(cap);
             let ratio = gp.max(*gn) / h;
             if !ratio.finite() {
                 *gp = T::zero();

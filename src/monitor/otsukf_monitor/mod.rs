@@ -5,10 +5,12 @@
 use nalgebra::Vector3;
 
 use super::align::align_state;
-use super::input::{check_period, in_range, lever_arm_rates, next_phase, usable_aiding, Period};
-use super::{
-    ChannelState, ConfigError, Health, OtsukfDetail, OtsukfReport, Phase, UkfMonitorConfig,
+use super::input::{
+    aiding_in_range, check_period, in_range, lever_arm_rates, next_phase, saturated, usable_aiding,
+    FrozenCheck, Period,
 };
+use super::realign::AidingTrack;
+use super::{ChannelState, ConfigError, Health, OtsukfDetail, OtsukfReport, Phase};
 use crate::filter::{Gate, Otsukf, UkfError};
 use crate::math::Real;
 use crate::model::{
@@ -16,122 +18,15 @@ use crate::model::{
     StateVec, VehicleModel, NZ, STATE_ANGLES,
 };
 
+mod config;
+mod recover;
+
+pub use config::OtsukfConfig;
+
+/// Statistics pause after an unusable or saturated sample, s.
+const INPUT_HOLDOFF_S: f64 = 0.5;
+
 const MEAS_ANGLES: [bool; NZ] = [false, false, false, true, true, true];
-
-/// Configuration of [`OtsukfMonitor`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct OtsukfConfig<T> {
-    /// Vehicle, sensors, aiding, start-up timing and minimum faults (the
-    /// detector fields of the innovation monitor are not used).
-    pub base: UkfMonitorConfig<T>,
-    /// Random-walk power spectral density of the fault model per channel,
-    /// ((m/s²)²/s, (rad/s)²/s): `Q^f = psd · dt` per step. It sets how fast a
-    /// fault estimate follows a change (and how noisy it is when quiet).
-    pub fault_psd: ImuVec<T>,
-    /// Initial fault standard deviation per channel (`P^f₀`).
-    pub fault_sigma0: ImuVec<T>,
-    /// A channel is declared faulty when `|f̂ − b| ≥ k_on·σ_f` and
-    /// `|f̂ − b| ≥ min_fault` (`b` the nominal bias learned at start-up)…
-    pub k_on: T,
-    /// …and cleared when `|f̂ − b| < k_off·σ_f` or `|f̂ − b| < min_fault/2`.
-    pub k_off: T,
-    /// Adaptive fault noise: when one update moves a channel's fault
-    /// estimate by more than `adapt_k` of its standard deviation (the fault
-    /// filter is being pulled by a change it was not expecting), that
-    /// channel's `Q^f` is multiplied by its `adapt_gain` for `adapt_hold_s`, so a
-    /// step is followed in a few aiding periods instead of being smoothed by
-    /// a random walk tuned for a quiet bias. A gain of 1 disables it on that
-    /// channel.
-    pub adapt_k: T,
-    /// See [`adapt_k`](Self::adapt_k).
-    pub adapt_gain: ImuVec<T>,
-    /// See [`adapt_k`](Self::adapt_k).
-    pub adapt_hold_s: T,
-    /// With `Some(l)`, the adaptation is also held while a monitored
-    /// channel's `|f̂ − b| ≥ l·σ_f`, so a fault that keeps changing (a slow
-    /// sine) is followed with the faster random walk all the time it is
-    /// present, not only after sudden moves. It pays where the aiding is
-    /// fast and precise (\[OTS\]'s setting: 100 Hz, 0.01°); with 10 Hz GNSS
-    /// the extra fault-estimate noise costs more than the lag it saves
-    /// (measured on S2/S3, see the README), hence `None` by default.
-    pub adapt_level: Option<T>,
-}
-
-impl<T: Real> OtsukfConfig<T> {
-    /// Defaults around an innovation-monitor configuration: fault random walk
-    /// of 0.05 (m/s²)²/s and (0.5 °/s)²/s — a step is followed within about a
-    /// second at 10 Hz aiding — initial fault σ of 1 m/s² and 1 °/s, and a
-    /// 4σ / 2σ hysteresis (4σ: the 0.3 m/s² step of S2 is flagged while
-    /// S2, S3 and 24 fault-free hours raise no false flag). The `Q^f`
-    /// adaptation (×10 for 0.3 s after a 3σ move) is on for the
-    /// accelerometers only: with 10 Hz GNSS or 5 Hz DVL/compass aiding it
-    /// measured no gain on the gyro channels of S2 and S3 and 2 % more
-    /// fault-free noise (README, OTSUKF).
-    pub fn from_base(base: UkfMonitorConfig<T>) -> Self {
-        let deg = core::f64::consts::PI / 180.0;
-        let ga = T::lit(0.05);
-        let gg = T::lit((0.5 * deg) * (0.5 * deg));
-        Self {
-            base,
-            fault_psd: ImuVec::new(ga, ga, ga, gg, gg, gg),
-            fault_sigma0: ImuVec::new(
-                T::one(),
-                T::one(),
-                T::one(),
-                T::lit(deg),
-                T::lit(deg),
-                T::lit(deg),
-            ),
-            k_on: T::lit(4.0),
-            k_off: T::lit(2.0),
-            adapt_k: T::lit(3.0),
-            adapt_gain: ImuVec::new(
-                T::lit(10.0),
-                T::lit(10.0),
-                T::lit(10.0),
-                T::one(),
-                T::one(),
-                T::one(),
-            ),
-            adapt_hold_s: T::lit(0.3),
-            adapt_level: None,
-        }
-    }
-
-    /// Checks every field, the base configuration's included; the error
-    /// names the first offending field.
-    pub fn validate(&self) -> Result<(), ConfigError> {
-        self.base.validate()?;
-        let pos = |v: T| v.finite() && v > T::zero();
-        let positive: [(&'static str, bool); 6] = [
-            ("fault_psd", self.fault_psd.iter().all(|v| pos(*v))),
-            ("fault_sigma0", self.fault_sigma0.iter().all(|v| pos(*v))),
-            ("k_on", pos(self.k_on)),
-            ("k_off", pos(self.k_off)),
-            ("adapt_k", pos(self.adapt_k)),
-            ("adapt_level", self.adapt_level.is_none_or(pos)),
-        ];
-        if let Some(&(field, _)) = positive.iter().find(|(_, ok)| !ok) {
-            return Err(ConfigError::NonPositive(field));
-        }
-        let in_range: [(&'static str, bool); 3] = [
-            // Hysteresis: the clear threshold may not exceed the set one.
-            ("k_off", self.k_off <= self.k_on),
-            (
-                "adapt_gain",
-                self.adapt_gain.iter().all(|g| g.finite() && *g >= T::one()),
-            ),
-            (
-                "adapt_hold_s",
-                self.adapt_hold_s.finite() && self.adapt_hold_s >= T::zero(),
-            ),
-        ];
-        if let Some(&(field, _)) = in_range.iter().find(|(_, ok)| !ok) {
-            return Err(ConfigError::OutOfRange(field));
-        }
-        Ok(())
-    }
-}
 
 /// The optimal two-stage UKF (OTSUKF) monitor (\[OTS\], SPEC §6) for one IMU.
 ///
@@ -156,6 +51,13 @@ pub struct OtsukfMonitor<T> {
     learn_count: T,
     latched: [i8; 6],
     boost: ImuVec<T>,
+    /// Gate rejections and last fusion per aiding channel (re-alignment).
+    track: AidingTrack<T>,
+    /// Repeated samples (frozen output).
+    frozen: FrozenCheck<T>,
+    /// Time left during which nothing is learned and no new fault is
+    /// declared: after an unusable or saturated sample, a re-alignment.
+    holdoff: T,
 }
 
 impl<T: Real> OtsukfMonitor<T> {
@@ -193,6 +95,9 @@ impl<T: Real> OtsukfMonitor<T> {
             learn_count: T::zero(),
             latched: [0; 6],
             boost: ImuVec::zeros(),
+            track: AidingTrack::new(),
+            frozen: FrozenCheck::new(),
+            holdoff: T::zero(),
             cfg,
         })
     }
@@ -203,24 +108,46 @@ impl<T: Real> OtsukfMonitor<T> {
     }
 
     /// One monitor period with the measured `dt` and whatever aiding
-    /// arrived. Never panics; anomalies are reported in the health flags.
+    /// arrived. Never panics; anomalies are reported in the health flags
+    /// (what each one does and how it clears: `docs/recovery.md`).
     #[inline(never)] // one copy in the image, not one per caller (issue 17)
     pub fn step(&mut self, imu: &ImuVec<T>, dt: T, aiding: &Measurement<T>) -> OtsukfReport<T> {
         let b = self.cfg.base;
         let mut health = Health::default();
         let in_range = in_range(imu, &b.full_scale);
         health.input_invalid = !in_range;
+        health.frozen = self.frozen.update(imu, in_range, b.frozen_samples);
+        health.saturated = in_range && saturated(imu, &b.full_scale);
         // Unlike the innovation monitor, a gap is not bridged with a capped
         // period: the two-stage filter only predicts over normal periods.
-        let dt_ok = matches!(check_period(dt, b.imu_period), Period::Valid(_));
+        let period = check_period(dt, b.imu_period);
+        let dt_ok = matches!(period, Period::Valid(_));
         health.dt_out_of_range = !dt_ok;
-        let u_corr = imu - self.filter.fault();
-        let omega = lever_arm_rates(in_range, &u_corr);
+        let elapsed = match period {
+            Period::Valid(d) | Period::Long(d) => d,
+            Period::Invalid => T::zero(),
+        };
+        self.track.elapse(elapsed);
+        self.holdoff = (self.holdoff - elapsed).max(T::zero());
+        // Aiding outside its physical range is never used.
+        let (aiding_checked, aiding_invalid) = aiding_in_range(aiding, b.max_aiding_speed);
+        let aiding = &aiding_checked;
+        health.aiding_invalid = aiding_invalid;
+        let usable = in_range && !health.frozen;
+        if !usable || health.saturated {
+            self.holdoff = self.holdoff.max(T::lit(INPUT_HOLDOFF_S));
+        }
+        // Through an invalid or frozen sample the last good one stands in
+        // (as in the innovation monitor): the state keeps moving with the
+        // vehicle instead of freezing.
+        let u_meas = if usable { *imu } else { *self.frozen.last() };
+        let u_corr = u_meas - self.filter.fault();
+        let omega = lever_arm_rates(usable, &u_corr);
         if self.phase == Phase::Aligning {
             self.try_align(aiding, &omega);
-            return self.compose(imu, health, false);
+            return self.compose(&u_meas, health, false);
         }
-        if in_range && dt_ok {
+        if dt_ok {
             match self.predict(&u_corr, dt) {
                 Ok(reset) => health.covariance_reset |= reset,
                 Err(ModelError::PitchSingularity) => health.pitch_singular = true,
@@ -228,52 +155,82 @@ impl<T: Real> OtsukfMonitor<T> {
             }
             self.phase_time += dt;
         }
+        // Through ±90°: the attitude is re-aligned from the aiding.
+        if health.pitch_singular && aiding.any() && self.recover_singular(aiding, &omega) {
+            health.aiding_realigned = true;
+            health.covariance_reset = true;
+        }
         let mut updated = false;
         if aiding.any() && !health.pitch_singular {
-            let available = usable_aiding(aiding);
-            let x_pred = self.filter.state();
-            let hjac = self.meas.jacobian(&x_pred, &omega);
-            let r = b.meas_sigma.component_mul(&b.meas_sigma);
-            let meas = self.meas;
-            let prior_var = self.filter.fault_covariance().diagonal();
-            let prior_fault = *self.filter.fault();
-            let (order, nonlinear) = self.meas.split();
-            match self.filter.update_split(
-                &order,
-                nonlinear,
-                &aiding.z,
-                &available,
-                |s| Ok::<_, ModelError>(meas.predict(s, &omega)),
-                &hjac,
-                &r,
-                &MEAS_ANGLES,
-                &mut self.gate,
-            ) {
-                Ok(out) => {
-                    updated = true;
-                    // The correction K^f r^f has covariance P^f⁻ − P^f⁺ under
-                    // the fault model: standardise it by that.
-                    let moved = self.filter.fault() - prior_fault;
-                    let spread = prior_var - self.filter.fault_covariance().diagonal();
-                    for ((bst, m), v) in self.boost.iter_mut().zip(moved.iter()).zip(spread.iter())
-                    {
-                        let s = v.max(T::zero()).sqrt_fast();
-                        if s > T::zero() && m.abs() > self.cfg.adapt_k * s {
-                            *bst = self.cfg.adapt_hold_s;
-                        }
-                    }
-                    health.aiding_rejected =
-                        out.bias_free.diag.iter().any(|d| d.available && !d.fused);
-                    health.covariance_reset |= out.bias_free.covariance_reset.is_some();
-                }
-                Err(_) => health.covariance_reset = true,
+            let (aiding, realigned) = self.realign_outliers(aiding, &omega);
+            if realigned {
+                health.aiding_realigned = true;
+                health.aiding_rejected = true;
+                health.covariance_reset = true;
+            }
+            if aiding.any() {
+                updated = self.update(&aiding, &omega, &mut health);
             }
         }
-        self.advance_phase();
+        let quiet = health == Health::default() && self.holdoff <= T::zero();
+        self.advance_phase(quiet);
         if self.phase == Phase::Monitoring {
-            self.decide();
+            self.decide(self.holdoff <= T::zero());
         }
-        self.compose(imu, health, updated)
+        // An unusable sample is not passed on: the corrected sample is the
+        // stand-in the filter used (never NaN).
+        self.compose(&u_meas, health, updated)
+    }
+
+    /// The two-stage update with the outlier gate; true when applied.
+    #[inline(never)] // own stack frame and one copy (issue 17)
+    fn update(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>, health: &mut Health) -> bool {
+        let b = self.cfg.base;
+        let available = usable_aiding(aiding);
+        let x_pred = self.filter.state();
+        let hjac = self.meas.jacobian(&x_pred, omega);
+        let r = b.meas_sigma.component_mul(&b.meas_sigma);
+        let meas = self.meas;
+        let prior_var = self.filter.fault_covariance().diagonal();
+        let prior_fault = *self.filter.fault();
+        let (order, nonlinear) = self.meas.split();
+        let omega = *omega;
+        match self.filter.update_split(
+            &order,
+            nonlinear,
+            &aiding.z,
+            &available,
+            |s| Ok::<_, ModelError>(meas.predict(s, &omega)),
+            &hjac,
+            &r,
+            &MEAS_ANGLES,
+            &mut self.gate,
+        ) {
+            Ok(out) => {
+                // The correction K^f r^f has covariance P^f⁻ − P^f⁺ under
+                // the fault model: standardise it by that.
+                let moved = self.filter.fault() - prior_fault;
+                let spread = prior_var - self.filter.fault_covariance().diagonal();
+                for ((bst, m), v) in self.boost.iter_mut().zip(moved.iter()).zip(spread.iter()) {
+                    let s = v.max(T::zero()).sqrt_fast();
+                    if s > T::zero() && m.abs() > self.cfg.adapt_k * s {
+                        *bst = self.cfg.adapt_hold_s;
+                    }
+                }
+                for (i, d) in out.bias_free.diag.iter().enumerate() {
+                    if d.available {
+                        self.track.record(i, d.fused);
+                        health.aiding_rejected |= !d.fused;
+                    }
+                }
+                health.covariance_reset |= out.bias_free.covariance_reset.is_some();
+                true
+            }
+            Err(_) => {
+                health.covariance_reset = true;
+                false
+            }
+        }
     }
 
     #[inline(never)] // own stack frame and one copy (issue 17)
@@ -332,9 +289,11 @@ impl<T: Real> OtsukfMonitor<T> {
         }
     }
 
-    fn advance_phase(&mut self) {
+    /// Learning takes only `quiet` steps (no health flag, no hold-off):
+    /// a glitch cannot poison the nominal bias.
+    fn advance_phase(&mut self, quiet: bool) {
         let b = &self.cfg.base;
-        if self.phase == Phase::Learning {
+        if self.phase == Phase::Learning && quiet {
             // The nominal bias (SPEC §8a): what the filter attributes to
             // the IMU once converged, averaged over the learning period
             // because a single sample of f̂ carries its whole estimation
@@ -365,8 +324,10 @@ impl<T: Real> OtsukfMonitor<T> {
     }
 
     /// The per-channel decision on `f̂ − b`, and the `adapt_level` hold of
-    /// the `Q^f` boost, which tests the same standardised estimate.
-    fn decide(&mut self) {
+    /// the `Q^f` boost, which tests the same standardised estimate. New
+    /// faults are declared only when `may_raise` (not during a hold-off);
+    /// a declared one clears as usual.
+    fn decide(&mut self, may_raise: bool) {
         let f = self.filter.fault() - self.nominal;
         let pf = self.filter.fault_covariance();
         let hold = self.cfg.adapt_hold_s;
@@ -389,7 +350,7 @@ impl<T: Real> OtsukfMonitor<T> {
                 *bst = hold;
             }
             if *l == 0 {
-                if mag >= self.cfg.k_on * sigma && mag >= min {
+                if may_raise && mag >= self.cfg.k_on * sigma && mag >= min {
                     *l = if fj > T::zero() { 1 } else { -1 };
                 }
             } else if mag < self.cfg.k_off * sigma

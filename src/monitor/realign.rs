@@ -1,0 +1,199 @@
+//! Re-alignment to the aiding, shared by the single-IMU monitors: after a
+//! jump of the aiding that the outlier gate cannot follow (a GNSS or DVL
+//! glitch, `docs/recovery.md`), and when the Euler attitude has reached its
+//! singularity (pitch through ±90°). The triad concerned is re-initialised
+//! from one aiding epoch with the initial covariance instead of being fused
+//! — what navigation filters do after a bounded number of rejections
+//! (reset / re-alignment, e.g. Groves, *Principles of GNSS, Inertial, and
+//! Multisensor Integrated Navigation Systems*, 2nd ed., §17.3.2).
+
+use nalgebra::Vector3;
+
+use crate::math::{wrap_pi, Real};
+use crate::model::{
+    Mat6, MeasVec, Measurement, MeasurementModel, StateVec, VehicleModel, NX, NZ, PITCH, ROLL,
+};
+
+/// The last observation of every aiding channel: consecutive gate
+/// rejections and the time since it was last fused.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct AidingTrack<T> {
+    /// Consecutive gate rejections per channel.
+    pub rejection_run: [u16; NZ],
+    /// Time since each channel was last fused, s.
+    pub since_fused: [T; NZ],
+}
+
+impl<T: Real> AidingTrack<T> {
+    /// Nothing seen yet.
+    pub fn new() -> Self {
+        Self {
+            rejection_run: [0; NZ],
+            since_fused: [T::lit(1e9); NZ],
+        }
+    }
+
+    /// Time passes.
+    pub fn elapse(&mut self, dt: T) {
+        for s in self.since_fused.iter_mut() {
+            *s += dt;
+        }
+    }
+
+    /// Channel `i` was offered to the update: fused or rejected.
+    pub fn record(&mut self, i: usize, fused: bool) {
+        if let Some(n) = self.rejection_run.get_mut(i) {
+            *n = if fused { 0 } else { n.saturating_add(1) };
+        }
+        if fused {
+            if let Some(s) = self.since_fused.get_mut(i) {
+                *s = T::zero();
+            }
+        }
+    }
+
+    /// A channel neither fused nor re-aligned counts as one more rejection.
+    pub fn withheld(&mut self, i: usize) {
+        if let Some(n) = self.rejection_run.get_mut(i) {
+            *n = n.saturating_add(1);
+        }
+    }
+}
+
+/// The channels due for re-alignment: present, rejected `limit` times in
+/// a row, fused within `timeout` s (a jump of aiding in use — aiding that
+/// first arrives or returns after a loss is fused as before), and with an
+/// innovation (angles wrapped) beyond `bound` or not finite.
+pub(crate) fn realign_due<T: Real>(
+    aiding: &Measurement<T>,
+    predicted: &MeasVec<T>,
+    bound: &MeasVec<T>,
+    rejection_run: &[u16; NZ],
+    since_fused: &[T; NZ],
+    limit: u16,
+    timeout: T,
+) -> [bool; NZ] {
+    let mut due = [false; NZ];
+    for (i, d) in due.iter_mut().enumerate() {
+        let (Some(a), Some(z), Some(zp), Some(b), Some(run), Some(fused)) = (
+            aiding.available.get(i),
+            aiding.z.get(i),
+            predicted.get(i),
+            bound.get(i),
+            rejection_run.get(i),
+            since_fused.get(i),
+        ) else {
+            continue;
+        };
+        let mut innovation = *z - *zp;
+        if i >= ROLL {
+            innovation = wrap_pi(innovation);
+        }
+        *d = *a
+            && *fused <= timeout
+            && *run >= limit
+            && (!innovation.finite() || innovation.abs() > *b);
+    }
+    due
+}
+
+/// `x` with the attitude triad (when `att`) and the body velocity (when
+/// `vel`) re-initialised from `aiding`, and which states were. A triad is
+/// re-initialised only when complete and finite in this epoch, an
+/// attitude only away from the Euler singularity; the velocity is rotated
+/// with the (re-aligned) attitude and corrected for the lever arm with the
+/// body rate `omega`.
+pub(crate) fn realigned_state<T: Real>(
+    model: &VehicleModel<T>,
+    meas: &MeasurementModel<T>,
+    x: &StateVec<T>,
+    aiding: &Measurement<T>,
+    omega: &Vector3<T>,
+    att: bool,
+    vel: bool,
+) -> (StateVec<T>, [bool; NX]) {
+    let complete = |r: core::ops::Range<usize>| {
+        aiding
+            .available
+            .get(r.clone())
+            .is_some_and(|a| a.iter().all(|v| *v))
+            && aiding
+                .z
+                .iter()
+                .skip(r.start)
+                .take(r.len())
+                .all(|v| v.finite())
+    };
+    let mut x = *x;
+    let mut reset = [false; NX];
+    if att && complete(ROLL..NZ) {
+        let mut xa = x;
+        xa.fixed_rows_mut::<3>(ROLL)
+            .copy_from(&aiding.z.fixed_rows::<3>(ROLL));
+        if model.check_attitude(&xa).is_ok() {
+            x = xa;
+            for r in reset.iter_mut().skip(ROLL) {
+                *r = true;
+            }
+        }
+    }
+    if vel && complete(0..3) {
+        let v: Vector3<T> = aiding.z.fixed_rows::<3>(0).into_owned();
+        let v_imu = meas.velocity_to_body(&x, &v) - omega.cross(&meas.lever_arm);
+        if v_imu.iter().all(|c| c.finite()) {
+            x.fixed_rows_mut::<3>(0).copy_from(&v_imu);
+            for r in reset.iter_mut().take(3) {
+                *r = true;
+            }
+        }
+    }
+    (x, reset)
+}
+
+/// `p` with the rows and columns of the `reset` states zeroed and their
+/// variances at `initial_sigma²`: still positive definite when `p` was.
+pub(crate) fn reset_covariance<T: Real>(
+    p: &Mat6<T>,
+    reset: &[bool; NX],
+    initial_sigma: &StateVec<T>,
+) -> Mat6<T> {
+    let mut p = *p;
+    for (i, ri) in reset.iter().enumerate() {
+        for (j, rj) in reset.iter().enumerate() {
+            if *ri || *rj {
+                if let Some(v) = p.get_mut((i, j)) {
+                    *v = T::zero();
+                }
+            }
+        }
+        if *ri {
+            let s = initial_sigma.get(i).copied().unwrap_or(T::one());
+            if let Some(v) = p.get_mut((i, i)) {
+                *v = s * s;
+            }
+        }
+    }
+    p
+}
+
+/// Whether this epoch's aiding can re-align an attitude the prediction
+/// refused (`pitch_singular`: the state or its sigma points reached the
+/// Euler singularity): a complete, finite attitude with `|cos θ|` at least
+/// twice `cos_pitch_min`, so that the sigma points around it (initial
+/// σ of a few degrees) are clear of the singularity too and the prediction
+/// can resume (with the defaults: |θ| ≤ 78.5°, the singularity at 84.3°).
+pub(crate) fn singular_recoverable<T: Real>(
+    model: &VehicleModel<T>,
+    aiding: &Measurement<T>,
+) -> bool {
+    let complete = aiding
+        .available
+        .get(ROLL..NZ)
+        .is_some_and(|a| a.iter().all(|v| *v));
+    let finite = aiding.z.iter().skip(ROLL).all(|v| v.finite());
+    let clear = aiding
+        .z
+        .get(PITCH)
+        .is_some_and(|theta| theta.sin_cos_fast().1.abs() >= model.cos_pitch_min * T::lit(2.0));
+    complete && finite && clear
+}
