@@ -16,7 +16,7 @@ use serde_json::Value;
 
 /// Unit suffixes (SI with `_` for `/` and powers as digits) and the
 /// dimensionless ones.
-const SUFFIXES: [&str; 16] = [
+const SUFFIXES: [&str; 17] = [
     "_s",
     "_hz",
     "_h",
@@ -24,6 +24,7 @@ const SUFFIXES: [&str; 16] = [
     "_m_s",
     "_m_s2",
     "_m_s3",
+    "_m2_s3",
     "_rad",
     "_rad_s",
     "_rad_s2",
@@ -208,6 +209,21 @@ fn logs() {
     ]);
     assert_eq!(v["cases"].as_array().unwrap().len(), 18);
     assert_eq!(v["cases"][0]["injection"]["size_deg_s"], 5.0);
+    // Both single-IMU monitors on a real log, one output shape.
+    for monitor in ["ukf", "otsukf"] {
+        let v = json(&[
+            "replay",
+            &data("px4_fmuv3_outdoor_flight.ulg"),
+            "--monitor",
+            monitor,
+            "--json",
+        ]);
+        assert_eq!(v["monitor"], monitor);
+        assert_eq!(v["channels"].as_array().unwrap().len(), 6);
+        assert_eq!(v["meas_sigma_velocity_m_s"].as_array().unwrap().len(), 3);
+    }
+    let v = json(&["otsukf", "--seeds", "1", "--json"]);
+    assert!(v["rmse"]["otsukf"]["f_p_deg_s"].as_f64().unwrap() > 0.0);
     let html = tmp("r.html");
     let v = json(&["report", &log, "--out", html.to_str().unwrap(), "--json"]);
     assert_eq!(v["verdicts"].as_array().unwrap().len(), 36);

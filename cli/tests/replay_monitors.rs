@@ -210,7 +210,7 @@ fn learned_inflation_removes_the_false_alarms_of_a_real_flight() {
     let on = run(&[]);
     assert!(events(&off) >= 2, "{off}");
     assert_eq!(events(&on), 0, "{on}");
-    for imu in on["innovation_inflation"].as_array().unwrap() {
+    for imu in on["innovation_inflation_factor"].as_array().unwrap() {
         let f: Vec<f64> = imu
             .as_array()
             .unwrap()

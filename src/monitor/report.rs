@@ -72,6 +72,17 @@ pub struct Health {
     pub aiding_realigned: bool,
 }
 
+impl Health {
+    /// A triad was re-aligned to the aiding (its covariance reset); with
+    /// `rejected`, the aiding epoch that showed it was not fused either.
+    /// One place for both single-IMU monitors (`monitor::realign`).
+    pub(crate) fn mark_realigned(&mut self, rejected: bool) {
+        self.aiding_realigned = true;
+        self.aiding_rejected |= rejected;
+        self.covariance_reset = true;
+    }
+}
+
 /// Everything a single-IMU monitor says about one period: the fields both
 /// monitors share at top level, the monitor-specific ones in `detail`
 /// ([`UkfDetail`] for [`UkfMonitor`](super::UkfMonitor), [`OtsukfDetail`]

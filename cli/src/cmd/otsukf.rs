@@ -54,6 +54,9 @@ pub(crate) struct Args {
     /// Keep only the fault rows of one shape (F1 step, F2 ramp, F3 sine).
     #[arg(long)]
     shape: Option<String>,
+    /// One JSON object on stdout instead of the table (docs/cli-json.md).
+    #[arg(long)]
+    json: bool,
 }
 
 /// Runs `otsukf`.
@@ -71,6 +74,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         qf_scale,
         fault_free,
         shape,
+        json,
     } = args;
     use hal_sim::ots::{run_augmented, run_otsukf, RmseAccumulator, Setting, PAPER_RMSE};
     use imu_fdi::model::ImuVec;
@@ -132,6 +136,58 @@ pub(crate) fn run(args: Args) -> Result<()> {
             let a = run_augmented(&scn, seed, &c).ok_or_else(|| anyhow!("augmented UKF failed"))?;
             aug.merge(&a);
         }
+    }
+    if json {
+        // Keys carry the unit of each RMSE (SPEC §9 table units).
+        const KEYS: [&str; 12] = [
+            "u_m_s",
+            "v_m_s",
+            "w_m_s",
+            "roll_deg",
+            "pitch_deg",
+            "yaw_deg",
+            "f_ax_m_s2",
+            "f_ay_m_s2",
+            "f_az_m_s2",
+            "f_p_deg_s",
+            "f_q_deg_s",
+            "f_r_deg_s",
+        ];
+        let obj = |v: &[f64]| {
+            serde_json::Value::Object(
+                KEYS.iter()
+                    .zip(v.iter())
+                    .map(|(k, x)| ((*k).to_string(), serde_json::json!(x)))
+                    .collect(),
+            )
+        };
+        let (r2, ra) = (two.rmse(), aug.rmse());
+        let (q2, qa) = (two.quiet_rms(), aug.quiet_rms());
+        let quiet = |q: &[f64]| {
+            serde_json::Value::Object(
+                KEYS[6..]
+                    .iter()
+                    .zip(q.iter())
+                    .map(|(k, x)| ((*k).to_string(), serde_json::json!(x)))
+                    .collect(),
+            )
+        };
+        super::json::emit(&serde_json::json!({
+            "scenario": scn.name,
+            "first_seed": first_seed,
+            "seeds": seeds,
+            "rmse": {
+                "otsukf": obj(&r2),
+                "augmented": if augmented { obj(&ra) } else { serde_json::Value::Null },
+                "paper": obj(&PAPER_RMSE),
+            },
+            "fault_free_noise": {
+                "otsukf": quiet(&q2),
+                "augmented": if augmented { quiet(&qa) } else { serde_json::Value::Null },
+            },
+            "false_flags": false_flags,
+        }));
+        return Ok(());
     }
     out!(
             "{} — SPEC §9 RMSE over seeds {}..{} (states over fault-active samples; each fault over its own)",

@@ -255,7 +255,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         note!("wrote {}", p.display());
     }
     if json {
-        out!("{}", serde_json::to_string_pretty(&s)?);
+        out!("{}", serde_json::to_string(&s)?);
     }
     Ok(())
 }

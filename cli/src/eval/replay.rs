@@ -369,6 +369,12 @@ pub fn replay_observed(
         if k == 0 {
             sum.process_noise_psd = cfg.process_noise.psd.iter().copied().collect();
             sum.meas_sigma = cfg.meas_sigma.iter().copied().collect();
+            sum.process_noise_psd_accel_m2_s3 =
+                sum.process_noise_psd.iter().take(3).copied().collect();
+            sum.process_noise_psd_gyro_rad2_s =
+                sum.process_noise_psd.iter().skip(3).copied().collect();
+            sum.meas_sigma_velocity_m_s = sum.meas_sigma.iter().take(3).copied().collect();
+            sum.meas_sigma_attitude_rad = sum.meas_sigma.iter().skip(3).copied().collect();
         }
         monitors.push(ReplayMonitor::new(opts.monitor, cfg)?);
     }
@@ -533,9 +539,16 @@ pub fn replay_observed(
     if let Some(mut w) = writer {
         w.flush()?;
     }
-    for ch in &mut sum.channels {
+    for (i, ch) in sum.channels.iter_mut().enumerate() {
         if ch.fault_rmse_n > 0 {
-            ch.fault_rmse_si = Some((ch.fault_sq_sum / ch.fault_rmse_n as f64).sqrt());
+            let rmse = (ch.fault_sq_sum / ch.fault_rmse_n as f64).sqrt();
+            ch.fault_rmse_si = Some(rmse);
+            // Channels a_x, a_y, a_z, then p, q, r.
+            if i < 3 {
+                ch.fault_rmse_m_s2 = Some(rmse);
+            } else {
+                ch.fault_rmse_rad_s = Some(rmse);
+            }
         }
     }
     sum.imus = imu_idx.len();

@@ -35,7 +35,12 @@ pub struct ChannelSummary {
     /// With truth: RMS error of the fault estimate over this channel's
     /// fault-active monitored samples (SPEC §9), SI units: m/s² for the
     /// accelerometer channels, rad/s for the gyro channels.
+    #[serde(skip)]
     pub fault_rmse_si: Option<f64>,
+    /// The same for an accelerometer channel, m/s² (JSON `fault_rmse_m_s2`).
+    pub fault_rmse_m_s2: Option<f64>,
+    /// The same for a gyro channel, rad/s (JSON `fault_rmse_rad_s`).
+    pub fault_rmse_rad_s: Option<f64>,
     /// Samples behind `fault_rmse_si`.
     #[serde(skip)]
     pub fault_rmse_n: usize,
@@ -65,9 +70,19 @@ pub struct ReplaySummary {
     /// First and last time replayed, s.
     pub span_s: (f64, f64),
     /// IMU 0's process-noise PSD `[a_x … r]` ((m/s²)²/Hz, (rad/s)²/Hz).
+    #[serde(skip)]
     pub process_noise_psd: Vec<f64>,
+    /// Its accelerometer part, (m/s²)²/Hz = m²/s³.
+    pub process_noise_psd_accel_m2_s3: Vec<f64>,
+    /// Its gyro part, (rad/s)²/Hz = rad²/s.
+    pub process_noise_psd_gyro_rad2_s: Vec<f64>,
     /// Measurement σ `[v×3 (m/s), roll, pitch, yaw (rad)]`.
+    #[serde(skip)]
     pub meas_sigma: Vec<f64>,
+    /// Its velocity part, m/s.
+    pub meas_sigma_velocity_m_s: Vec<f64>,
+    /// Its attitude part, rad.
+    pub meas_sigma_attitude_rad: Vec<f64>,
     /// Time monitoring started, s.
     pub monitoring_from_s: Option<f64>,
     /// Rows IMU 0's monitor spent monitoring.
@@ -77,5 +92,6 @@ pub struct ReplaySummary {
     /// Per IMU, the UKF monitor's learned inflation of each aiding
     /// channel's t statistic `[v×3, roll, pitch, yaw]` (empty for the
     /// OTSUKF).
+    #[serde(rename = "innovation_inflation_factor")]
     pub innovation_inflation: Vec<[f64; 6]>,
 }

@@ -157,16 +157,13 @@ impl<T: Real> OtsukfMonitor<T> {
         }
         // Through ±90°: the attitude is re-aligned from the aiding.
         if health.pitch_singular && aiding.any() && self.recover_singular(aiding, &omega) {
-            health.aiding_realigned = true;
-            health.covariance_reset = true;
+            health.mark_realigned(false);
         }
         let mut updated = false;
         if aiding.any() && !health.pitch_singular {
             let (aiding, realigned) = self.realign_outliers(aiding, &omega);
             if realigned {
-                health.aiding_realigned = true;
-                health.aiding_rejected = true;
-                health.covariance_reset = true;
+                health.mark_realigned(true);
             }
             if aiding.any() {
                 updated = self.update(&aiding, &omega, &mut health);

@@ -262,17 +262,14 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         if health.pitch_singular && meas_ok {
             let omega = lever_arm_rates(in_range, &(imu - self.nominal_bias));
             if self.recover_singular(aiding, &omega) {
-                health.aiding_realigned = true;
-                health.covariance_reset = true;
+                health.mark_realigned(false);
             }
         }
         if meas_ok && !health.pitch_singular {
             let omega = lever_arm_rates(in_range, &(imu - self.nominal_bias));
             let (aiding, realigned) = self.realign_outliers(aiding, &omega);
             if realigned {
-                health.aiding_realigned = true;
-                health.aiding_rejected = true;
-                health.covariance_reset = true;
+                health.mark_realigned(true);
             }
             if aiding.any() {
                 match self.update(&aiding, &omega) {
