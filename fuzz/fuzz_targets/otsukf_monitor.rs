@@ -9,7 +9,7 @@ use hal_sim::ots::{otsukf_config, Setting};
 use hal_sim::recovery::{clean_run, ots_off_nominal};
 use hal_sim::Scenario;
 use imu_fdi::monitor::{OtsukfMonitor, Phase};
-use imu_fdi_fuzz::{count, single_imu, Base, StepResult};
+use imu_fdi_fuzz::{count, outputs_finite, single_imu, Base, StepResult};
 use libfuzzer_sys::fuzz_target;
 
 fn base(scn: Scenario) -> Base<OtsukfMonitor<f32>> {
@@ -34,17 +34,7 @@ fn base(scn: Scenario) -> Base<OtsukfMonitor<f32>> {
 
 fn step(m: &mut OtsukfMonitor<f32>, s: &hal_sim::recovery::Step) -> StepResult {
     let r = m.step(&s.imu, s.dt, &s.aiding);
-    let finite = r
-        .state
-        .iter()
-        .chain(r.state_sigma.iter())
-        .chain(r.fault_estimate.iter())
-        .chain(r.detail.fault_sigma.iter())
-        .chain(r.corrected_imu.iter())
-        .all(|v| v.is_finite());
-    if !finite {
-        return Err(format!("non-finite output: {r:?}"));
-    }
+    outputs_finite(&r, r.detail.fault_sigma.iter())?;
     Ok((ots_off_nominal(&r, m), r.phase == Phase::Monitoring))
 }
 

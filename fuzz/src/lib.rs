@@ -30,6 +30,28 @@ pub const MAX_ATTACK: usize = 4000;
 static STEPS: AtomicU64 = AtomicU64::new(0);
 static INPUTS: AtomicU64 = AtomicU64::new(0);
 
+/// The single-IMU report's common outputs (state, its σ, fault estimate,
+/// corrected sample) and the monitor-specific ones in `extra` are all
+/// finite; otherwise the report, for the failure message.
+pub fn outputs_finite<'a, X: core::fmt::Debug>(
+    r: &'a imu_fdi::monitor::Report<f32, X>,
+    extra: impl Iterator<Item = &'a f32>,
+) -> Result<(), String> {
+    let finite = r
+        .state
+        .iter()
+        .chain(r.state_sigma.iter())
+        .chain(r.fault_estimate.iter())
+        .chain(r.corrected_imu.iter())
+        .chain(extra)
+        .all(|v| v.is_finite());
+    if finite {
+        Ok(())
+    } else {
+        Err(format!("non-finite output: {r:?}"))
+    }
+}
+
 /// Counts `steps` monitor steps of one input; every 4096 inputs prints the
 /// totals (the campaign's step count is the last line of its log).
 pub fn count(steps: u64) {

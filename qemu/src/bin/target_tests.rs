@@ -22,6 +22,11 @@ use imu_fdi::model::{ImuVec, MeasVec};
 
 use imu_fdi_qemu::instructions;
 
+// The parity monitors' tests (a directory without `main.rs`: no extra bin).
+#[path = "target_tests/parity.rs"]
+mod parity;
+use parity::{parity_flight_on_target, parity_s4_on_target};
+
 const EXPECTATIONS: &str = include_str!("../../../tests/data/target_expectations.txt");
 
 /// The numbers of the expectation line `key` with the given leading fields.
@@ -178,125 +183,6 @@ fn otsukf_s3_matches_f64() -> Result<(), &'static str> {
         }
     }
     Ok(())
-}
-
-/// S4 on the target: the cone6 parity monitor in `f32` detects and isolates
-/// the 0.5 °/s bias on sensor 5, with no alarm before it; prints the
-/// instruction cost per step.
-fn parity_s4_on_target() -> Result<(), &'static str> {
-    use hal_sim::array::{ArraySim, ArraySpec};
-    use imu_fdi::parity::{Geometry, ParityConfig, ParityMonitor, ParityPhase, Reading};
-    let spec = ArraySpec::s4();
-    let sim = ArraySim::new(&spec, 1);
-    let mut cfg = ParityConfig::<f32>::gyro(spec.rate_hz, spec.errors.full_scale as f32);
-    cfg.set_lead_in(sim.lead_in_samples());
-    let g = Geometry::<f32, 6>::cone6();
-    let t0 = instructions();
-    let mut m = ParityMonitor::<f32, 6, 16>::new(&g, cfg).map_err(|_| "configuration refused")?;
-    let setup = instructions().wrapping_sub(t0);
-    let (mut sum, mut n, mut max) = (0u64, 0u64, 0u32);
-    let mut isolated = None;
-    let mut early_alarm = false;
-    for s in sim {
-        let r: [Reading<f32>; 6] = s.readings.map(|r| r.map(|x| x as f32));
-        let t0 = instructions();
-        let rep = core::hint::black_box(m.step(&r));
-        let c = instructions().wrapping_sub(t0);
-        if rep.phase == ParityPhase::Monitoring {
-            sum += u64::from(c);
-            n += 1;
-            max = max.max(c);
-        }
-        if s.t >= 0.0 && s.t < 6.0 && (rep.fault || rep.isolated.is_some()) {
-            early_alarm = true;
-        }
-        if let Some(k) = rep.isolated {
-            isolated.get_or_insert((k, s.t));
-        }
-    }
-    hprintln!(
-        "parity monitor (cone6, f32, S4 seed 1): configuration {} instructions; per step mean {} max {}; size {} bytes",
-        setup,
-        sum / n.max(1),
-        max,
-        core::mem::size_of::<ParityMonitor<f32, 6, 16>>()
-    );
-    if early_alarm {
-        return Err("alarm before the fault");
-    }
-    match isolated {
-        Some((5, t)) if (6.0..6.5).contains(&t) => Ok(()),
-        _ => Err("sensor 5 not isolated within 0.5 s of onset"),
-    }
-}
-
-/// The parity monitor for real flights (`ParityConfig::gyro_flight`: in-flight
-/// calibration, multi-scale tests) on three simulated gyro triads at 100 Hz:
-/// a 2 °/s bias on IMU 2's z gyro 15 s into monitoring is isolated within
-/// 10 s, nothing alarms before it, and the instruction cost per step is
-/// printed (the statistics run once per 0.25-s block).
-fn parity_flight_on_target() -> Result<(), &'static str> {
-    use hal_sim::array::{
-        triad_directions, ArrayFault, ArrayFaultKind, ArrayKind, ArraySim, ArraySpec, Layout,
-    };
-    use imu_fdi::parity::{Geometry, ParityConfig, ParityMonitor, ParityPhase, Reading};
-    use nalgebra::Matrix3;
-    let mut spec = ArraySpec::<9>::fault_free(
-        "triads3",
-        triad_directions(&[0.0, 0.0, 0.0]),
-        ArrayKind::Gyro,
-        Layout::Triads,
-        30.0,
-    );
-    let onset = 15.0;
-    let _ = spec.faults.push(ArrayFault {
-        sensor: 8,
-        start: onset,
-        end: f64::INFINITY,
-        kind: ArrayFaultKind::Bias(2.0_f64.to_radians()),
-    });
-    let sim = ArraySim::new(&spec, 1);
-    let mut cfg = ParityConfig::<f32>::gyro_flight(spec.rate_hz, spec.errors.full_scale as f32);
-    cfg.train_samples = sim.lead_in_samples();
-    let g =
-        Geometry::<f32, 9>::triads(&[Matrix3::identity(); 3]).map_err(|_| "geometry refused")?;
-    let t0 = instructions();
-    let mut m = ParityMonitor::<f32, 9, 40>::new(&g, cfg).map_err(|_| "configuration refused")?;
-    let setup = instructions().wrapping_sub(t0);
-    let (mut sum, mut n, mut max) = (0u64, 0u64, 0u32);
-    let mut isolated = None;
-    let mut early_alarm = false;
-    for s in sim {
-        let r: [Reading<f32>; 9] = s.readings.map(|r| r.map(|x| x as f32));
-        let t0 = instructions();
-        let rep = core::hint::black_box(m.step(&r));
-        let c = instructions().wrapping_sub(t0);
-        if rep.phase == ParityPhase::Monitoring {
-            sum += u64::from(c);
-            n += 1;
-            max = max.max(c);
-            if s.t < onset && (rep.fault || rep.isolated.is_some()) {
-                early_alarm = true;
-            }
-        }
-        if let Some(k) = rep.isolated {
-            isolated.get_or_insert((k, s.t));
-        }
-    }
-    hprintln!(
-        "parity monitor for real flights (3 triads, f32, multi-scale): configuration {} instructions; per step mean {} max {}; size {} bytes",
-        setup,
-        sum / n.max(1),
-        max,
-        core::mem::size_of::<ParityMonitor<f32, 9, 40>>()
-    );
-    if early_alarm {
-        return Err("alarm before the fault");
-    }
-    match isolated {
-        Some((8, t)) if (onset..onset + 10.0).contains(&t) => Ok(()),
-        _ => Err("sensor 8 not isolated within 10 s of onset"),
-    }
 }
 
 /// The FIFO path's own work per 50 Hz period on the M4F: parsing 20
