@@ -86,9 +86,12 @@ pub fn scan(bytes: &[u8]) -> BinScan {
             break;
         };
         in_garbage = false;
-        if msg[2] == FMT_TYPE {
-            let (typ, len) = (msg[3], usize::from(msg[4]));
-            if len >= 3 {
+        // A FMT message defines another type's length. The FMT type's own
+        // length is fixed: a FMT redefining itself (as a mutated file can)
+        // would make later FMT messages shorter than their fields.
+        if let Some(&[_, _, FMT_TYPE, typ, len, ..]) = msg.get(..5) {
+            let len = usize::from(len);
+            if len >= 3 && typ != FMT_TYPE {
                 lens[usize::from(typ)] = Some(len);
             }
         }
@@ -124,5 +127,17 @@ mod tests {
         assert!(d.contains("truncated message"), "{d}");
         assert_eq!(scan(&fmt(5, 6)).describe_problems(), None);
         assert_eq!(scan(&[]).messages, 0);
+    }
+
+    #[test]
+    fn a_fmt_redefining_fmt_is_ignored() {
+        // Found by the dataflash_file fuzz target: FMT redefined FMT's own
+        // length to 3, and the next FMT's fields were read out of bounds.
+        let mut b = fmt(FMT_TYPE, 3);
+        b.extend([0xA3, 0x95, FMT_TYPE]);
+        b.extend(fmt(5, 6));
+        let s = scan(&b);
+        assert_eq!(s.messages, 2);
+        assert_eq!(s.garbage_bytes, 3);
     }
 }
