@@ -129,13 +129,16 @@ fn injected_gyro_steps_are_isolated_at_the_measured_rates() {
     // 1 °/s, measured: z 151/174, y 125/174, x 9/174 (IMU0's x gyro reads
     // 12 °/s of aliased vibration per sample: with it, a step on IMU1 or
     // IMU2 x cannot be told from the opposite step on the other one within
-    // 10 s at the isolation margin); 6 cases with a false alarm.
+    // 10 s at the isolation margin); 8 cases with a false alarm — 6 of
+    // them alarms or isolations that the step's own blocks raise within
+    // 0.5 s after it ends, when the alarm's confirmation (three decisions
+    // above threshold) came only then.
     let (z, n) = passes(&cases, axis(2));
     assert!(z >= 149 && n == 174, "{z}/{n}");
     let (y, _) = passes(&cases, axis(1));
     assert!(y >= 123, "{y}");
     let fa = cases.iter().filter(|c| c.false_alarm).count();
-    assert!(fa <= 6, "{fa}");
+    assert!(fa <= 8, "{fa}");
     // Every IMU is covered: z steps on each IMU isolated in ≥ 45 of 58 cases.
     for imu in 0..3 {
         let (ok, _) = passes(&cases, |c| {
@@ -164,14 +167,15 @@ fn injected_accelerometer_steps_are_isolated_at_the_measured_rates() {
     )
     .unwrap();
     // 0.3 m/s², measured: x 142/174, y 157/174, z 92/174 (the a_z
-    // vibration events above), 4 cases with a false alarm.
+    // vibration events above), 5 cases with a false alarm (3 of them
+    // alarms the step's own blocks raise right after it ends).
     let axis = |a: usize| move |c: &StepCase| c.injection.channel == a;
     let (x, _) = passes(&cases, axis(0));
     let (y, _) = passes(&cases, axis(1));
     let (z, _) = passes(&cases, axis(2));
     assert!(x >= 140 && y >= 155 && z >= 90, "{x} {y} {z}");
     let fa = cases.iter().filter(|c| c.false_alarm).count();
-    assert!(fa <= 4, "{fa}");
+    assert!(fa <= 5, "{fa}");
     for imu in 0..3 {
         let (ok, _) = passes(&cases, |c| {
             c.injection.imu == imu && c.injection.channel < 2

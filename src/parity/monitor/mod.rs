@@ -136,6 +136,8 @@ pub struct ParityMonitor<T: Real, const N: usize, const W: usize> {
     /// Blocks the multi-scale alarm still holds after its last decision
     /// above threshold.
     ms_hold: u16,
+    /// Consecutive decisions above threshold (the alarm's confirmation).
+    ms_above: u16,
     ms_trained: bool,
 }
 
@@ -213,6 +215,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             ms_block: BlockSums::default(),
             ms_prev: None,
             ms_hold: 0,
+            ms_above: 0,
             ms_prev2: None,
             ms_blocks: 0,
             ms_trained: false,
@@ -416,6 +419,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         self.ms_prev = None;
         self.ms_prev2 = None;
         self.ms_hold = 0;
+        self.ms_above = 0;
         match self.space.without(k) {
             Ok(sub) => {
                 let c = self.space.transition_to(&sub);

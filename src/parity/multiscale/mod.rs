@@ -92,6 +92,9 @@ pub struct MultiscaleDecision<T> {
     pub isolate: Option<(usize, T)>,
     /// The calibration and covariances learned from this block.
     pub learning: bool,
+    /// The alarm comes from the gross test (a fault far beyond any
+    /// vibration excursion: raised at once, without confirmation).
+    pub gross: bool,
 }
 
 /// Learning state of the tests in one parity space.
@@ -459,6 +462,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                     margin,
                     isolate: None,
                     learning: false,
+                    gross: false,
                 };
             }
         }
@@ -478,6 +482,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                         out.suspect = Some(k);
                         out.bias = bias;
                         out.margin = score - second;
+                        out.gross = true;
                         isolate = Some((k, score - second));
                     }
                 }
