@@ -227,15 +227,7 @@ fn row(name: &str, outcomes: &[Outcome]) -> usize {
 /// Cells known not to recover yet, with the reason (`docs/recovery.md`,
 /// "open"): printed, not counted. A cell listed here that recovers fails
 /// the test, so the list cannot go stale.
-const OPEN: [(&str, Class, AidingKind, &str); 1] = [(
-    "UKF innovation monitor",
-    Class::AidingLoss,
-    AidingKind::DvlCompass,
-    "after 180 s without aiding, a persistent velocity innovation \
-     (t ≈ 6–7 on v, estimate ≈ −0.035 m/s² on a_y) flags a_y on and off for \
-     more than 10 s; probably the IMU bias drift that the nominal-bias \
-     tracking (issue 15) cannot follow without aiding (not verified)",
-)];
+const OPEN: [(&str, Class, AidingKind, &str); 0] = [];
 
 type Outcome = Result<(), (f64, &'static str)>;
 
