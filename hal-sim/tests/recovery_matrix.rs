@@ -464,3 +464,51 @@ fn parity_monitor_recovers_from_every_class() {
     );
     assert_eq!(failed, 0, "parity: {failed} runs not back to nominal");
 }
+
+/// The cause of the last open cell (issue 16): after 180 s without aiding
+/// the first update used to teach the nominal-bias tracker the dead-reckoned
+/// innovation (its step spanned the whole gap), which then flagged a_y on and
+/// off. Now the return re-aligns the drifted velocity, the learned bias
+/// moves by no more than its drift limit allows over the hold-off, and the
+/// monitor is nominal again within the settling time.
+#[test]
+fn aiding_back_after_a_loss_leaves_the_learned_bias_alone() {
+    let scn = Scenario::s2();
+    let cfg = monitor_config(&scn, &RunOptions::default());
+    for seed in 1..=SEEDS {
+        let (run, end) = corrupted(Class::AidingLoss, AidingKind::DvlCompass, &scn, seed);
+        let mut m = UkfMonitor::<f32>::new(cfg).unwrap();
+        let (mut before, mut after, mut realigned, mut last_off) = (None, None, false, end);
+        for s in &run {
+            let r = m.step(&s.imu, s.dt, &s.aiding);
+            after = Some(r.nominal_bias);
+            if s.t < FAULT_AT {
+                before = Some(r.nominal_bias);
+            } else if s.t >= end {
+                realigned |= r.health.aiding_realigned;
+                if ukf_off_nominal(&r, &m).is_some() {
+                    last_off = s.t;
+                }
+            }
+        }
+        let moved = (after.unwrap() - before.unwrap()).abs().max();
+        println!(
+            "seed {seed}: re-aligned {realigned}, nominal bias moved {moved:.1e}, \
+             nominal from +{:.1} s after the return",
+            last_off - end
+        );
+        assert!(
+            realigned,
+            "seed {seed}: the drifted velocity was fused, not re-aligned"
+        );
+        assert!(
+            moved < 2e-3,
+            "seed {seed}: the learned bias moved by {moved}"
+        );
+        assert!(
+            last_off - end < SETTLE_S,
+            "seed {seed}: off nominal until +{}",
+            last_off - end
+        );
+    }
+}
