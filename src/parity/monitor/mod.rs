@@ -110,6 +110,9 @@ pub struct ParityMonitor<T: Real, const N: usize, const W: usize> {
     filled: usize,
     cusum_pos: [T; N],
     cusum_neg: [T; N],
+    /// The window test has seen a gross bias since the CUSUMs last ran
+    /// without one (`white.rs`, `restart_after_gross`).
+    cusum_gross: bool,
     suspect_run: (Option<usize>, u16),
     removed: [bool; N],
     /// Threshold factors `[GLT, PCA, CUSUM]` from calibration.
@@ -202,6 +205,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             filled: 0,
             cusum_pos: [T::zero(); N],
             cusum_neg: [T::zero(); N],
+            cusum_gross: false,
             suspect_run: (None, 0),
             removed: [false; N],
             scales: [T::one(); 3],
@@ -411,6 +415,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         self.head = 0;
         self.cusum_pos = [T::zero(); N];
         self.cusum_neg = [T::zero(); N];
+        self.cusum_gross = false;
         self.suspect_run = (None, 0);
         self.ms_block = BlockSums::default();
         self.ms_prev = None;
