@@ -244,3 +244,103 @@ fn parity_detect_only_alarm_stands_while_the_bias_does() {
         );
     }
 }
+
+/// The parity fuzz target's attack decoder (`fuzz/fuzz_targets/
+/// parity_monitor.rs`, white-noise base only): replays `data` on the
+/// target's snapshot, then 11 s of the valid run; the reports of the last
+/// second.
+fn replay_parity_attack(data: &[u8]) -> Vec<imu_fdi::parity::ParityReport<f32, 6>> {
+    use hal_sim::array::{cone6_directions, ArrayKind, ArraySim, ArraySpec, Layout};
+    use imu_fdi::parity::{Geometry, ParityConfig, ParityMonitor, Reading};
+
+    let spec = ArraySpec::fault_free(
+        "cone6",
+        cone6_directions(),
+        ArrayKind::Gyro,
+        Layout::Single,
+        60.0,
+    );
+    let sim = ArraySim::new(&spec, 1);
+    let fs = spec.errors.full_scale as f32;
+    let dirs = spec.directions.map(|d| d.map(|v| v as f32));
+    let mut cfg = ParityConfig::<f32>::gyro(100.0, fs);
+    cfg.set_lead_in(sim.lead_in_samples());
+    let mut m = ParityMonitor::<f32, 6, 40>::new(&Geometry::new(&dirs).unwrap(), cfg).unwrap();
+    let run: Vec<_> = sim
+        .map(|s| (s.t, s.readings.map(|r| r.map(|v| v as f32))))
+        .collect();
+    let mut k = run.iter().take_while(|(t, _)| *t < 2.0).count();
+    for (_, r) in run.iter().take(k) {
+        m.step(r);
+    }
+    assert_eq!(
+        data.first().map(|b| b & 1),
+        Some(0),
+        "white-noise base only"
+    );
+    let pos = std::cell::Cell::new(1);
+    let byte = || {
+        let b = data.get(pos.get()).copied().unwrap_or(0);
+        pos.set(pos.get() + 1);
+        b
+    };
+    let end = (k + 3000).min(run.len() - 1200);
+    let mut frozen = [None::<f32>; 6];
+    while pos.get() < data.len() && k < end {
+        let (op, mask) = (byte(), byte());
+        let value = f32::from_bits(u32::from_le_bytes([byte(), byte(), byte(), byte()]));
+        let frac = f32::from(byte() as i8) / 127.0;
+        for _ in 0..1 + usize::from(op >> 3) {
+            let Some((_, clean)) = run.get(k) else { break };
+            k += 1;
+            let mut readings = *clean;
+            for (i, r) in readings.iter_mut().enumerate() {
+                if mask & (1 << i) == 0 {
+                    frozen[i] = None;
+                    continue;
+                }
+                let x = match *r {
+                    Reading::Sample(x) => x,
+                    _ => 0.0,
+                };
+                *r = match op & 7 {
+                    0 => Reading::Sample(value),
+                    1 => Reading::Missing,
+                    2 => Reading::BusError,
+                    3 => Reading::Sample(x + frac * fs),
+                    4 => Reading::Sample(*frozen[i].get_or_insert(x)),
+                    5 => Reading::Sample(x.clamp(-0.5, 0.5) * 2.0 * fs),
+                    _ => *r,
+                };
+            }
+            m.step(&readings);
+        }
+    }
+    let reports: Vec<_> = run
+        .iter()
+        .skip(k)
+        .take(1100)
+        .map(|(_, r)| m.step(r))
+        .collect();
+    reports[1000..].to_vec()
+}
+
+/// `crash-78a8d4e6` of the parity target (found once it checked parity
+/// dimension 1 too): sensors 4 and 5 frozen long enough to latch `Stuck`
+/// after sensor 0 had been isolated — three sensors left, no parity space
+/// (`NoRedundancy`) — and the report kept the last alarm for good, with
+/// the stale dimension 1. Without a parity space the report now raises
+/// nothing and says dimension 0; the phase says the monitor cannot judge.
+#[test]
+fn parity_no_redundancy_reports_no_stale_alarm() {
+    use imu_fdi::parity::ParityPhase;
+    let data = [
+        0x80, 0xf4, 0xfa, 0xf0, 0xf0, 0xf0, 0x00, 0xf4, 0xf4, 0xf0, 0xa7, 0xf0, 0xa7, 0x02,
+    ];
+    for r in replay_parity_attack(&data) {
+        assert_eq!(r.phase, ParityPhase::NoRedundancy);
+        assert!(!r.fault && r.parity_dim == 0, "{r:?}");
+        assert_eq!(r.status.iter().filter(|s| s.is_failed()).count(), 3);
+        assert!(r.fused.is_some_and(|v| v.iter().all(|x| x.is_finite())));
+    }
+}

@@ -360,12 +360,26 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             }
         }
         report.phase = self.phase;
+        if matches!(self.phase, ParityPhase::NoRedundancy | ParityPhase::Lost) {
+            // No parity space left: nothing is tested, so nothing is
+            // alarmed — the phase says the monitor cannot judge (issue 16:
+            // the last alarm used to stay in the report for good, found by
+            // the parity fuzz target once it checked dimension 1 too).
+            report.fault = false;
+            report.flags = DetectorFlags::default();
+            report.cusum_ratio = T::zero();
+            report.suspect = None;
+        }
         if self.ms.is_some() && !self.ms_trained && self.phase == ParityPhase::Monitoring {
             // The multi-scale tests are still learning: cannot judge yet.
             report.phase = ParityPhase::Training;
         }
         report.status = status;
-        report.parity_dim = self.space.dim();
+        report.parity_dim = if matches!(self.phase, ParityPhase::NoRedundancy | ParityPhase::Lost) {
+            0
+        } else {
+            self.space.dim()
+        };
         if let Some(t) = &self.tests {
             report.glt_threshold = t.glt_threshold;
             report.pca_threshold = t.pca_threshold;
