@@ -230,7 +230,8 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             self.cusum_gross = true;
             return None;
         }
-        if !self.cusum_gross || !(report.glt < t.glt_threshold * T::lit(0.5)) {
+        let quiet = report.glt.finite() && report.glt < t.glt_threshold * T::lit(0.5);
+        if !self.cusum_gross || !quiet {
             return None;
         }
         self.cusum_gross = false;
