@@ -583,7 +583,7 @@ fn attitude_through_90_degrees_monitored_share() {
                     a[2]
                 );
                 assert!(
-                    a[4] > 0.0 && a[4] < SETTLE_S,
+                    (0.0..SETTLE_S).contains(&a[4]),
                     "{name} {vehicle} {monitor}: {a:?}"
                 );
             }
