@@ -136,10 +136,9 @@ fuzz_target!(|data: &[u8]| {
             .any(|s| !s.is_failed() && *s != imu_fdi::parity::SensorStatus::Healthy);
         let why = if stale {
             Some("a sensor neither healthy nor failed")
-        } else if r.fault && r.parity_dim >= 2 {
-            // With one parity dimension left (two sensors out) the monitor
-            // can detect but not isolate: an alarm there may stay after the
-            // attack (open, docs/recovery.md; `fuzz/open/`).
+        } else if r.fault {
+            // In any parity dimension, one (detect-only) included: the input
+            // that kept the CUSUM up there is `seed-detect-only-alarm`.
             Some("alarm")
         } else if failed <= 2 && r.phase != ParityPhase::Monitoring {
             Some("four or more sensors but not monitoring")

@@ -29,7 +29,7 @@ impl<T: Real> AidingTrack<T> {
     pub fn new() -> Self {
         Self {
             rejection_run: [0; NZ],
-            since_fused: [T::lit(1e9); NZ],
+            since_fused: [T::lit(NEVER_FUSED_S); NZ],
         }
     }
 
@@ -95,6 +95,49 @@ pub(crate) fn realign_due<T: Real>(
             && (!innovation.finite() || innovation.abs() > *b);
     }
     due
+}
+
+/// The channels that return after an aiding loss (present, not fused for
+/// longer than `timeout` s, but fused before: `since_fused` below
+/// [`NEVER_FUSED_S`]) with an innovation beyond `bound` or not finite: the
+/// dead-reckoned state has drifted further than a fused update should
+/// pull it (its cross-covariances, grown over the gap, would move the other
+/// triad too), so the triad is re-aligned to the aiding instead: the reset
+/// of the module header, applied when aiding returns after an outage.
+pub(crate) fn returned_beyond<T: Real>(
+    aiding: &Measurement<T>,
+    predicted: &MeasVec<T>,
+    bound: &MeasVec<T>,
+    since_fused: &[T; NZ],
+    timeout: T,
+) -> [bool; NZ] {
+    let mut due = [false; NZ];
+    for (i, d) in due.iter_mut().enumerate() {
+        let (Some(a), Some(z), Some(zp), Some(b), Some(fused)) = (
+            aiding.available.get(i),
+            aiding.z.get(i),
+            predicted.get(i),
+            bound.get(i),
+            since_fused.get(i),
+        ) else {
+            continue;
+        };
+        let mut innovation = *z - *zp;
+        if i >= ROLL {
+            innovation = wrap_pi(innovation);
+        }
+        *d = *a && returned(*fused, timeout) && (!innovation.finite() || innovation.abs() > *b);
+    }
+    due
+}
+
+/// `since_fused` of a channel never fused yet, s (larger than any gap).
+pub(crate) const NEVER_FUSED_S: f64 = 1e9;
+
+/// Whether a channel last fused `since_fused` s ago returns after a loss:
+/// silent beyond `timeout`, but fused at some point before.
+pub(crate) fn returned<T: Real>(since_fused: T, timeout: T) -> bool {
+    since_fused > timeout && since_fused < T::lit(0.5 * NEVER_FUSED_S)
 }
 
 /// `x` with the attitude triad (when `att`) and the body velocity (when

@@ -68,7 +68,9 @@ pub struct Health {
     pub aiding_invalid: bool,
     /// After `gate_max_rejections` gate rejections in a row, an aiding
     /// innovation beyond `realign_innovation`: its triad's states were
-    /// re-aligned to the aiding (covariance reset) instead of fusing it.
+    /// re-aligned to the aiding (covariance reset) instead of fusing it. The
+    /// UKF monitor does the same when aiding returns after a loss (silent
+    /// beyond `aiding_timeout_s`) further off than `realign_innovation`.
     pub aiding_realigned: bool,
 }
 

@@ -32,10 +32,16 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             let w = s.latest_variance.map(|v| T::one() / v);
             estimate_corrected(&s.signature, &w, &s.latest_innovation, &[true; NZ])
         };
+        // Nothing is learned while the statistics are held (a bad sample, a
+        // re-alignment, aiding back after a loss): the innovations then
+        // measure the filter's re-convergence, and `dt_learn` may span a
+        // whole gap (issue 16: after 180 s without aiding the first update
+        // moved the nominal bias by 0.9 × its innovation-mapped estimate).
+        let held = self.stats_holdoff > T::zero();
         match self.phase {
             Phase::Learning => {
                 self.learn_inflation();
-                if let Some(f) = instant(self) {
+                if let Some(f) = if held { None } else { instant(self) } {
                     let k = (dt_learn / self.cfg.learn_tau_s).min(T::one());
                     self.nominal_bias += f * k;
                 }
@@ -50,7 +56,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                     .t_statistic
                     .iter()
                     .all(|t| t.abs() < self.t_threshold() * T::lit(0.5));
-                let estimate = if quiet { instant(self) } else { None };
+                let estimate = if quiet && !held { instant(self) } else { None };
                 if let Some(f) = estimate {
                     let k = dt_learn / self.cfg.drift_tau_s;
                     for ((b, df), lim) in self

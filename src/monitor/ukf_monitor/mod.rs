@@ -5,6 +5,7 @@ use super::input::{
     aiding_in_range, check_period, in_range, lever_arm_rates, next_phase, saturated, usable_aiding,
     Period,
 };
+use super::realign::NEVER_FUSED_S;
 use super::{ChannelState, ConfigError, Health, Phase, UkfMonitorConfig, UkfReport};
 use crate::detect::{
     paper_matrix, Detector, InnovationWindow, Persistence, Statistic, TTest,
@@ -118,7 +119,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             z_threshold,
             windows: core::array::from_fn(|_| InnovationWindow::new()),
             since_seen: [T::lit(1e9); NZ],
-            since_fused: [T::lit(1e9); NZ],
+            since_fused: [T::lit(NEVER_FUSED_S); NZ],
             sensitivity: Mat6::zeros(),
             signature: Mat6::zeros(),
             latest_innovation: ImuVec::zeros(),
@@ -267,6 +268,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         if meas_ok && !health.pitch_singular {
             let omega = lever_arm_rates(in_range, &(imu - self.nominal_bias));
+            self.hold_after_loss(aiding);
             let (aiding, realigned) = self.realign_outliers(aiding, &omega);
             if realigned {
                 health.mark_realigned(true);

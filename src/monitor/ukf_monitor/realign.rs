@@ -5,7 +5,7 @@
 
 use super::*;
 use crate::monitor::realign::{
-    realign_due, realigned_state, reset_covariance, singular_recoverable,
+    realign_due, realigned_state, reset_covariance, returned, returned_beyond, singular_recoverable,
 };
 
 impl<T: Real, const W: usize> UkfMonitor<T, W> {
@@ -20,7 +20,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// statistics restart: windows cleared, decisions reset, a hold-off of
     /// `converge_s` while the filter settles. Only for a channel fused within
     /// `aiding_timeout_s`: aiding that first arrives or returns after a
-    /// loss is fused as before. Returns the aiding left to
+    /// loss is fused, unless its innovation is beyond `realign_innovation`:
+    /// then it is re-aligned the same way. Returns the aiding left to
     /// fuse and whether anything was re-aligned. A triad that is not complete
     /// in this epoch cannot be re-aligned: its outlying channel is withheld
     /// until it is.
@@ -31,7 +32,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     ) -> (Measurement<T>, bool) {
         let mut out = *aiding;
         let predicted = self.meas.predict(self.ukf.state(), omega);
-        let due = realign_due(
+        let mut due = realign_due(
             aiding,
             &predicted,
             &self.cfg.realign_innovation,
@@ -40,6 +41,21 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             u16::from(self.cfg.gate_max_rejections),
             self.cfg.aiding_timeout_s,
         );
+        // Aiding back after a loss, with the dead-reckoned state further off
+        // than `realign_innovation`: re-aligned too (issue 16). Not while
+        // converging from the first alignment, which the aiding just set.
+        if self.phase != Phase::Converging {
+            let back = returned_beyond(
+                aiding,
+                &predicted,
+                &self.cfg.realign_innovation,
+                &self.since_fused,
+                self.cfg.aiding_timeout_s,
+            );
+            for (d, b) in due.iter_mut().zip(back.iter()) {
+                *d |= *b;
+            }
+        }
         if !due.iter().any(|d| *d) {
             return (out, false);
         }
@@ -78,6 +94,31 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         self.apply_realignment(x, &reset);
         (out, true)
+    }
+
+    /// Aiding back after a loss (a channel silent beyond `aiding_timeout_s`
+    /// that was fused before): the dead-reckoned state and its covariance
+    /// have grown over the gap, and the first innovations after it measure
+    /// that growth, not the IMU. The statistics are held for `converge_s`
+    /// (windows cleared, nothing recorded, the nominal bias not adapted:
+    /// `after_update`) while the filter re-converges; then the windows refill
+    /// on healthy data before the channels are judged again (issue 16).
+    pub(super) fn hold_after_loss(&mut self, aiding: &Measurement<T>) {
+        if self.phase == Phase::Converging {
+            return;
+        }
+        let timeout = self.cfg.aiding_timeout_s;
+        let back = aiding
+            .available
+            .iter()
+            .zip(self.since_fused.iter())
+            .any(|(a, s)| *a && returned(*s, timeout));
+        if back {
+            for w in self.windows.iter_mut() {
+                w.clear();
+            }
+            self.stats_holdoff = self.stats_holdoff.max(self.cfg.converge_s);
+        }
     }
 
     /// At the Euler singularity (the prediction cannot run, `pitch_singular`)

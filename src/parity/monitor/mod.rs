@@ -110,6 +110,9 @@ pub struct ParityMonitor<T: Real, const N: usize, const W: usize> {
     filled: usize,
     cusum_pos: [T; N],
     cusum_neg: [T; N],
+    /// The window test has seen a gross bias since the CUSUMs last ran
+    /// without one (`white.rs`, `restart_after_gross`).
+    cusum_gross: bool,
     suspect_run: (Option<usize>, u16),
     removed: [bool; N],
     /// Threshold factors `[GLT, PCA, CUSUM]` from calibration.
@@ -204,6 +207,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             filled: 0,
             cusum_pos: [T::zero(); N],
             cusum_neg: [T::zero(); N],
+            cusum_gross: false,
             suspect_run: (None, 0),
             removed: [false; N],
             scales: [T::one(); 3],
@@ -359,12 +363,26 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             }
         }
         report.phase = self.phase;
+        if matches!(self.phase, ParityPhase::NoRedundancy | ParityPhase::Lost) {
+            // No parity space left: nothing is tested, so nothing is
+            // alarmed — the phase says the monitor cannot judge (issue 16:
+            // the last alarm used to stay in the report for good, found by
+            // the parity fuzz target once it checked dimension 1 too).
+            report.fault = false;
+            report.flags = DetectorFlags::default();
+            report.cusum_ratio = T::zero();
+            report.suspect = None;
+        }
         if self.ms.is_some() && !self.ms_trained && self.phase == ParityPhase::Monitoring {
             // The multi-scale tests are still learning: cannot judge yet.
             report.phase = ParityPhase::Training;
         }
         report.status = status;
-        report.parity_dim = self.space.dim();
+        report.parity_dim = if matches!(self.phase, ParityPhase::NoRedundancy | ParityPhase::Lost) {
+            0
+        } else {
+            self.space.dim()
+        };
         if let Some(t) = &self.tests {
             report.glt_threshold = t.glt_threshold;
             report.pca_threshold = t.pca_threshold;
@@ -414,6 +432,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         self.head = 0;
         self.cusum_pos = [T::zero(); N];
         self.cusum_neg = [T::zero(); N];
+        self.cusum_gross = false;
         self.suspect_run = (None, 0);
         self.ms_block = BlockSums::default();
         self.ms_prev = None;

@@ -152,6 +152,10 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                 report.flags.pca = false;
                 self.filled = 0;
             }
+            if let Some((ratio, arg)) = self.restart_after_gross(&t, report) {
+                cusum_ratio = ratio;
+                cusum_arg = arg;
+            }
         }
         if self.phase == ParityPhase::Calibrating {
             self.calibrate(&t, &b, report);
@@ -202,6 +206,58 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         if self.vote_to_isolate(k, report) {
             report.flags = DetectorFlags::default();
         }
+    }
+
+    /// After a gross bias (one the window test flags) has gone — the window
+    /// test back below half its threshold — the CUSUM excess above `h` it
+    /// built says nothing about what is left, and is cut to what
+    /// `window_blocks` blocks of the smallest bias the CUSUMs are tuned to
+    /// (`2κ`) would add: `h + window_blocks · κ`. Issue 16, found by the
+    /// parity fuzz target in a detect-only space: with the excess at the cap
+    /// (`h + 50 κ`), the offset the drift tracker could not follow during
+    /// the alarm (bias random walk, 0.33 block σ on a sensor with
+    /// κ = 0.52) made the CUSUM decay by `κ − μ` instead of `κ` per block,
+    /// and the alarm stood 11 s after valid input returned. A bias that
+    /// stays keeps the CUSUM rising from there (the alarm stands); a bias
+    /// that never reaches the window test's threshold is not affected. The
+    /// CUSUM ratio and its argument, recomputed, when a restart happened.
+    fn restart_after_gross(
+        &mut self,
+        t: &Tests<T, N>,
+        report: &mut ParityReport<T, N>,
+    ) -> Option<(T, Option<usize>)> {
+        if report.flags.glt {
+            self.cusum_gross = true;
+            return None;
+        }
+        let quiet = report.glt.finite() && report.glt < t.glt_threshold * T::lit(0.5);
+        if !self.cusum_gross || !quiet {
+            return None;
+        }
+        self.cusum_gross = false;
+        let blocks = T::lit(self.cfg.window_blocks as f64);
+        let mut best = (T::zero(), None);
+        for (k, ((gp, gn), (h, kappa))) in self
+            .cusum_pos
+            .iter_mut()
+            .zip(self.cusum_neg.iter_mut())
+            .zip(t.cusum_h.iter().zip(t.kappa.iter()))
+            .enumerate()
+        {
+            if *h <= T::zero() {
+                continue;
+            }
+            let limit = *h + *kappa * blocks;
+            *gp = gp.min(limit);
+            *gn = gn.min(limit);
+            let ratio = gp.max(*gn) / *h;
+            if ratio > best.0 {
+                best = (ratio, Some(k));
+            }
+        }
+        report.cusum_ratio = best.0;
+        report.flags.cusum = best.0 > T::one();
+        Some(best)
     }
 
     /// One calibration decision: records each statistic against its
