@@ -27,11 +27,14 @@ enum Setup {
     Specs,
     /// Plus the online aiding-delay estimate.
     EstimateDelay,
+    /// Plus the heading-offset estimate.
+    EstimateHeading,
 }
 
 fn config(scn: &Scenario, setup: Setup) -> UkfMonitorConfig<f32> {
     let mut c = monitor_config::<f32>(scn, &RunOptions::default());
     c.estimate_aiding_delay = matches!(setup, Setup::EstimateDelay);
+    c.estimate_heading_offset = matches!(setup, Setup::EstimateHeading);
     c
 }
 
@@ -226,23 +229,45 @@ fn late_aiding_estimated_twenty_seeds_and_ten_hours() {
     assert_eq!(t.detected, t.episodes);
 }
 
-/// A 3° heading offset between the attitude aiding and the IMU frame is
-/// not tolerated (issue 15, item 3, open): the monitor flags it. Measured
-/// here so that a change shows.
+/// A 3° heading offset between the attitude aiding and the IMU frame:
+/// ignored it raises hundreds of false alarms per hour; learnt from the
+/// GNSS velocity (`estimate_heading_offset`) far fewer, but not yet the
+/// issue's ≤ 1 per hour (open, docs/results.md). Both asserted as measured
+/// bounds so that a change shows.
 #[test]
-#[ignore = "5 seeds and 2 h: run with --release -- --ignored"]
-fn aircraft_heading_offset_is_not_tolerated() {
+#[ignore = "5 seeds and 2 h, three ways: run with --release -- --ignored"]
+fn aircraft_heading_offset() {
     let mut offset = Scenario::aircraft_fault_free(0.0);
     offset.aiding.heading_offset_rad = 3f64.to_radians();
-    let t = episodes(&offset, 100..105);
-    println!("aircraft, 3° heading offset, seeds 100-104: {}", t.line());
     let mut hour = offset.clone();
     hour.duration_s = 3600.0;
-    let m = fault_free(&hour, 200..202);
+    let ignored = fault_free(&hour, 200..202);
+    let learnt = fault_free_with(&hour, 200..202, Setup::EstimateHeading);
+    for (name, m) in [("ignored", &ignored), ("estimated", &learnt)] {
+        println!(
+            "aircraft, 3° heading offset, {name}, 2 fault-free hours (seeds 200-201): {} false-alarm events in {:.2} h",
+            m.false_alarm_events,
+            m.free_time_s / 3600.0
+        );
+    }
+    assert!(ignored.false_alarm_events > 100);
+    assert!(learnt.false_alarm_events <= 10);
+    let t = episodes(&offset, 100..105);
     println!(
-        "aircraft, 3° heading offset, 2 fault-free hours: {} false-alarm events in {:.2} h",
-        m.false_alarm_events,
-        m.free_time_s / 3600.0
+        "aircraft, 3° heading offset, ignored, seeds 100-104: {}",
+        t.line()
     );
-    assert!(m.false_alarm_events as f64 > m.free_time_s / 3600.0);
+    let t = episodes_with(&offset, 100..105, Setup::EstimateHeading);
+    println!(
+        "aircraft, 3° heading offset, estimated, seeds 100-104: {}",
+        t.line()
+    );
+    assert!(t.detected as f64 >= 0.95 * t.episodes as f64);
+    // Learning the offset costs nothing where there is none.
+    let t = episodes_with(
+        &Scenario::aircraft_fault_free(0.0),
+        100..105,
+        Setup::EstimateHeading,
+    );
+    assert_targets("aircraft, no offset, estimated, seeds 100-104", &t);
 }

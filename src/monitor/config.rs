@@ -174,6 +174,12 @@ pub struct UkfMonitorConfig<T> {
     /// learning, learning restarts. Read it with
     /// [`UkfMonitor::aiding_delay_estimate`](super::UkfMonitor::aiding_delay_estimate).
     pub estimate_aiding_delay: bool,
+    /// Learn a constant heading offset between the attitude aiding's frame
+    /// and the IMU's (issue 15): the yaw innovation is integrated with a
+    /// 20 s time constant, bounded to ±10°, paused while a fault is
+    /// flagged, and taken off the yaw aiding. Read it with
+    /// [`UkfMonitor::heading_offset_estimate`](super::UkfMonitor::heading_offset_estimate).
+    pub estimate_heading_offset: bool,
     /// An aiding channel silent for this long is "not monitored", s.
     pub aiding_timeout_s: T,
     /// Identical consecutive IMU samples before the IMU is reported frozen.
@@ -262,6 +268,7 @@ impl<T: Real> UkfMonitorConfig<T> {
             imu_period: T::lit(0.01),
             aiding_delay_s: T::zero(),
             estimate_aiding_delay: false,
+            estimate_heading_offset: false,
             aiding_timeout_s: T::lit(1.0),
             frozen_samples: 20,
         }

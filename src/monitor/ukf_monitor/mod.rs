@@ -20,6 +20,7 @@ use crate::stats::normal_upper_quantile;
 
 mod delay;
 mod detection;
+mod heading;
 mod realign;
 
 use delay::DelayEstimator;
@@ -92,6 +93,8 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     delay_estimator: DelayEstimator<T>,
     /// The lag the nominal bias and inflation were learnt at.
     learned_lag: usize,
+    /// Heading offset of the attitude aiding (`heading.rs`).
+    heading: heading::HeadingEstimator<T>,
     history: heapless::HistoryBuf<StateVec<T>, { MAX_DELAY_STEPS + 1 }>,
     report: UkfReport<T>,
 }
@@ -152,6 +155,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             delay_steps: (cfg.aiding_delay_s / cfg.imu_period).round().to_f64() as usize,
             delay_estimator: DelayEstimator::new(),
             learned_lag: 0,
+            heading: heading::HeadingEstimator::new(),
             history: heapless::HistoryBuf::new(),
             report: UkfReport::default(),
             cfg,
@@ -358,9 +362,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.sensitivity += VehicleModel::mul_state_jacobian(&a, &(self.sensitivity * dt)) + b * dt;
         self.last_input_b = b;
         // The state history serves a configured or estimated aiding latency.
-        if self.delay_steps > 0 || self.cfg.estimate_aiding_delay {
+        if self.keeps_history() {
             self.history.write(*self.ukf.state());
             self.delay_estimator.tick();
+            self.heading.tick();
         }
         Ok(reset)
     }
@@ -375,7 +380,17 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let h = self.meas.jacobian(&x_prior, omega);
         let r = self.cfg.meas_sigma.component_mul(&self.cfg.meas_sigma);
         let meas = self.meas;
+        let corrected;
+        let aiding = if self.cfg.estimate_heading_offset {
+            corrected = self.correct_heading(aiding);
+            &corrected
+        } else {
+            aiding
+        };
         let available = usable_aiding(aiding);
+        if self.cfg.estimate_heading_offset {
+            self.learn_heading_offset(aiding, omega);
+        }
         if self.cfg.estimate_aiding_delay {
             self.estimate_delay(aiding, &available, omega);
         }
@@ -464,11 +479,17 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.sensitivity -= out.gain * hx;
         // The correction moved the current state: shift the history with it so
         // the next delayed measurement sees a consistent past.
-        if self.delay_steps > 0 || self.cfg.estimate_aiding_delay {
+        if self.keeps_history() {
             self.shift_history(&x_prior);
         }
         self.last_h = h;
         Ok((rejected, out.covariance_reset.is_some()))
+    }
+
+    /// The state history serves a configured or estimated aiding latency
+    /// and the heading-offset estimate.
+    fn keeps_history(&self) -> bool {
+        self.delay_steps > 0 || self.cfg.estimate_aiding_delay || self.cfg.estimate_heading_offset
     }
 
     #[inline(never)] // keeps the copy of the history off `update`'s frame
@@ -511,66 +532,6 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             }
             _ => {}
         }
-    }
-
-    /// Feeds the aiding-delay estimator and applies its estimate. While a
-    /// fault is flagged the estimator sees nothing (a gyro ramp changes the
-    /// attitude's changes like a lag would) and the lag in use is kept.
-    #[inline(never)] // own stack frame and one copy (issue 17)
-    fn estimate_delay(
-        &mut self,
-        aiding: &Measurement<T>,
-        available: &[bool; NZ],
-        omega: &Vector3<T>,
-    ) {
-        let flagged = self
-            .report
-            .status
-            .iter()
-            .any(|s| matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative));
-        if flagged {
-            self.delay_estimator.interrupt();
-            return;
-        }
-        self.delay_estimator.observe(
-            self.history.oldest_ordered().rev(),
-            &self.meas,
-            aiding,
-            available,
-            &self.cfg.meas_sigma,
-            omega,
-        );
-        if let Some(lag) = self.delay_estimator.best() {
-            self.delay_steps = lag;
-            if lag.abs_diff(self.learned_lag) >= DELAY_RELEARN_STEPS {
-                self.relearn_at(lag);
-            }
-        }
-    }
-
-    /// The aiding-delay estimate moved to `lag` during learning: what was
-    /// learnt at the old lag (the nominal bias, the inflation) absorbed that
-    /// lag's innovations and, frozen once monitoring starts, would flag
-    /// for good (measured: a bias learnt at 0.12 s for a 0.2 s latency
-    /// flagged a_y for the rest of a fault-free hour). Learning restarts,
-    /// so monitoring begins only after `learn_s` at a steady lag. Once
-    /// monitoring, a moved lag is applied without relearning: a restart
-    /// then would absorb whatever fault is present into the nominal bias
-    /// (measured: post-clear false alarms on the aircraft episodes).
-    fn relearn_at(&mut self, lag: usize) {
-        self.learned_lag = lag;
-        if self.phase != Phase::Learning {
-            return;
-        }
-        self.phase_time = self.cfg.converge_s;
-        self.learn_clock = self.phase_time;
-        self.inflation_sum = [T::zero(); NZ];
-        self.inflation_n = [T::zero(); NZ];
-        self.inflation = [T::one(); NZ];
-        for w in self.windows.iter_mut() {
-            w.clear();
-        }
-        self.persistence.reset();
     }
 
     #[inline(never)] // own stack frame and one copy (issue 17)
