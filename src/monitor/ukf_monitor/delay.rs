@@ -39,7 +39,7 @@ use nalgebra::Vector3;
 use super::{UkfMonitor, DELAY_RELEARN_STEPS, MAX_DELAY_STEPS};
 use crate::math::{wrap_pi, Real};
 use crate::model::{MeasVec, Measurement, MeasurementModel, StateVec, NZ};
-use crate::monitor::{ChannelState, Phase};
+use crate::monitor::ChannelState;
 
 /// Aiding epochs summed into one block (2 s at 10 Hz): long enough for
 /// the vehicle's rates to change, short against IMU error growth.
@@ -291,17 +291,6 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// (measured: post-clear false alarms on the aircraft episodes).
     fn relearn_at(&mut self, lag: usize) {
         self.learned_lag = lag;
-        if self.phase != Phase::Learning {
-            return;
-        }
-        self.phase_time = self.cfg.converge_s;
-        self.learn_clock = self.phase_time;
-        self.inflation_sum = [T::zero(); NZ];
-        self.inflation_n = [T::zero(); NZ];
-        self.inflation = [T::one(); NZ];
-        for w in self.windows.iter_mut() {
-            w.clear();
-        }
-        self.persistence.reset();
+        self.restart_learning();
     }
 }

@@ -22,7 +22,10 @@
 //! straight flight the sums do not grow and nothing is applied. Learning
 //! pauses while a fault is flagged (an accelerometer fault turns `Δh` as
 //! well), and the estimate is bounded to ±[`HEADING_OFFSET_MAX_DEG`]:
-//! larger is a mounting error to fix, not to learn. Needs the aiding's
+//! larger is a mounting error to fix, not to learn. While learning, each
+//! applied step restarts learning, so monitoring begins at a settled
+//! offset once the vehicle has manoeuvred (in straight flight nothing is
+//! applied and learning ends as usual). Needs the aiding's
 //! velocity in NED (GNSS, M2); with body-frame DVL velocity (M1) the
 //! heading does not enter the velocity and nothing is learnt.
 
@@ -203,6 +206,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             h.sum_z = [T::zero(); 2];
             h.cross = T::zero();
             h.dot = T::zero();
+            // Learning started against the old offset: start it again.
+            self.restart_learning();
         }
     }
 }

@@ -534,6 +534,25 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
     }
 
+    /// During learning, starts it again (an aiding-timing or heading
+    /// estimate moved: what was learnt so far fits the old one); once
+    /// monitoring, does nothing, since a restart would absorb whatever fault
+    /// is present into the nominal bias.
+    fn restart_learning(&mut self) {
+        if self.phase != Phase::Learning {
+            return;
+        }
+        self.phase_time = self.cfg.converge_s;
+        self.learn_clock = self.phase_time;
+        self.inflation_sum = [T::zero(); NZ];
+        self.inflation_n = [T::zero(); NZ];
+        self.inflation = [T::one(); NZ];
+        for w in self.windows.iter_mut() {
+            w.clear();
+        }
+        self.persistence.reset();
+    }
+
     #[inline(never)] // own stack frame and one copy (issue 17)
     fn compose(&self, imu: &ImuVec<T>, health: Health, updated: bool) -> UkfReport<T> {
         let mut r = self.report;
