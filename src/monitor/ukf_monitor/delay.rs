@@ -62,8 +62,8 @@ pub(super) struct DelayEstimator<T> {
     /// the normalised block mismatch.
     mean: [[T; 3]; LAGS],
     square: [[T; 3]; LAGS],
-    /// Per lag and aiding channel, the mismatch summed over this block.
-    block: [[T; NZ]; LAGS],
+    /// Per lag and attitude channel, the mismatch summed over this block.
+    block: [[T; 3]; LAGS],
     /// Epochs in this block.
     block_epochs: u16,
     /// Lags evaluated at every epoch of every block averaged.
@@ -81,7 +81,7 @@ impl<T: Real> DelayEstimator<T> {
             cost: [T::zero(); LAGS],
             mean: [[T::zero(); 3]; LAGS],
             square: [[T::zero(); 3]; LAGS],
-            block: [[T::zero(); NZ]; LAGS],
+            block: [[T::zero(); 3]; LAGS],
             block_epochs: 0,
             valid: LAGS,
             block_valid: LAGS,
@@ -101,7 +101,7 @@ impl<T: Real> DelayEstimator<T> {
     /// flagged): none of its data reaches the estimate.
     pub(super) fn interrupt(&mut self) {
         self.prev = [None; NZ];
-        self.block = [[T::zero(); NZ]; LAGS];
+        self.block = [[T::zero(); 3]; LAGS];
         self.block_epochs = 0;
         self.block_valid = LAGS;
     }
@@ -171,7 +171,7 @@ impl<T: Real> DelayEstimator<T> {
             if !complete || !add.iter().all(|v| v.finite()) {
                 break;
             }
-            for (s, a) in acc.iter_mut().zip(add.iter()) {
+            for (s, a) in acc.iter_mut().zip(add.iter().skip(ATTITUDE.start)) {
                 *s += *a;
             }
             evaluated = lag + 1;
@@ -207,7 +207,6 @@ impl<T: Real> DelayEstimator<T> {
                 let mut spread = T::zero();
                 for (((a, sg), m), q) in acc
                     .iter()
-                    .skip(ATTITUDE.start)
                     .zip(sigma.iter().skip(ATTITUDE.start))
                     .zip(m.iter_mut())
                     .zip(q.iter_mut())
@@ -221,7 +220,7 @@ impl<T: Real> DelayEstimator<T> {
             }
             self.valid = self.valid.min(valid);
         }
-        self.block = [[T::zero(); NZ]; LAGS];
+        self.block = [[T::zero(); 3]; LAGS];
         self.block_epochs = 0;
         self.block_valid = LAGS;
     }
