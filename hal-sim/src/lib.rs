@@ -28,6 +28,8 @@ pub mod target_checks;
 pub mod trajectory;
 
 #[cfg(feature = "std")]
+pub mod episodes;
+#[cfg(feature = "std")]
 pub mod metrics;
 #[cfg(feature = "std")]
 pub mod recovery;

@@ -32,6 +32,11 @@ pub struct AidingSpec {
     /// this long before it is delivered.
     #[cfg_attr(feature = "std", serde(default))]
     pub delay_s: f64,
+    /// Constant heading offset of the attitude aiding's frame from the
+    /// IMU's, rad: the yaw it reports is the true yaw plus this (a
+    /// mis-surveyed antenna baseline or AHRS mounting).
+    #[cfg_attr(feature = "std", serde(default))]
+    pub heading_offset_rad: f64,
 }
 
 #[cfg(feature = "std")]
@@ -68,6 +73,7 @@ impl AidingSpec {
             att_rate_hz: 10.0,
             att_sigma: [0.02 * DEG, 0.02 * DEG, 0.05 * DEG],
             delay_s: 0.0,
+            heading_offset_rad: 0.0,
         }
     }
     /// 10 Hz GNSS velocity (σ 0.05 m/s) and 10 Hz GNSS attitude (σ 0.1°
@@ -80,6 +86,7 @@ impl AidingSpec {
             att_rate_hz: 10.0,
             att_sigma: [0.1 * DEG, 0.1 * DEG, 0.2 * DEG],
             delay_s: 0.0,
+            heading_offset_rad: 0.0,
         }
     }
 }
@@ -304,6 +311,7 @@ impl Scenario {
                 att_rate_hz: 100.0,
                 att_sigma: [att, att, att],
                 delay_s: 0.0,
+                heading_offset_rad: 0.0,
             },
             ..Self::s3()
         }

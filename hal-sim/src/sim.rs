@@ -212,8 +212,14 @@ impl Iterator for Simulator {
             for i in 0..3 {
                 let n = self.gauss();
                 if let (Some(a), Some(ok)) = (aiding.get_mut(3 + i), avail.get_mut(3 + i)) {
+                    let offset = if i == 2 {
+                        self.scenario.aiding.heading_offset_rad
+                    } else {
+                        0.0
+                    };
                     *a = wrap_pi_f64(
                         seen.state.get(3 + i).copied().unwrap_or(0.0)
+                            + offset
                             + sig.get(i).copied().unwrap_or(0.0) * n,
                     );
                     *ok = true;

@@ -166,6 +166,20 @@ pub struct UkfMonitorConfig<T> {
     /// fused against the state estimate of their own time, kept in a short
     /// history of up to [`MAX_DELAY_STEPS`](super::MAX_DELAY_STEPS) IMU periods.
     pub aiding_delay_s: T,
+    /// Estimate the aiding latency online (issue 15); `aiding_delay_s` is
+    /// then only the lag used until the first estimate (after 6 s of
+    /// attitude aiding). The estimate is the lag, within the state history
+    /// (≤ 0.22 s with 10 Hz attitude aiding), at which the IMU-propagated
+    /// attitude changes best match the aiding's; while it moves during
+    /// learning, learning restarts. Read it with
+    /// [`UkfMonitor::aiding_delay_estimate`](super::UkfMonitor::aiding_delay_estimate).
+    pub estimate_aiding_delay: bool,
+    /// Learn a constant heading offset between the attitude aiding's frame
+    /// and the IMU's (issue 15): the yaw innovation is integrated with a
+    /// 20 s time constant, bounded to ±10°, paused while a fault is
+    /// flagged, and taken off the yaw aiding. Read it with
+    /// [`UkfMonitor::heading_offset_estimate`](super::UkfMonitor::heading_offset_estimate).
+    pub estimate_heading_offset: bool,
     /// An aiding channel silent for this long is "not monitored", s.
     pub aiding_timeout_s: T,
     /// Identical consecutive IMU samples before the IMU is reported frozen.
@@ -253,6 +267,8 @@ impl<T: Real> UkfMonitorConfig<T> {
             ),
             imu_period: T::lit(0.01),
             aiding_delay_s: T::zero(),
+            estimate_aiding_delay: false,
+            estimate_heading_offset: false,
             aiding_timeout_s: T::lit(1.0),
             frozen_samples: 20,
         }

@@ -19,13 +19,21 @@ use crate::model::{
 };
 use crate::stats::normal_upper_quantile;
 
+mod delay;
 mod detection;
+mod heading;
 mod realign;
+
+use delay::DelayEstimator;
 
 /// Default window length (aiding epochs per t-test window).
 pub const DEFAULT_WINDOW: usize = 10;
 /// Longest aiding latency the state history covers, in IMU periods.
 pub const MAX_DELAY_STEPS: usize = 32;
+/// A move of the aiding-delay estimate, in IMU periods, away from the lag
+/// the nominal bias is being learnt at that restarts learning (see
+/// `UkfMonitor::relearn_at`): 0.03 s at 100 Hz.
+const DELAY_RELEARN_STEPS: usize = 3;
 
 const MEAS_ANGLES: [bool; NZ] = [false, false, false, true, true, true];
 /// Largest nominal bias the learner may assume, as a multiple of `min_fault`:
@@ -82,6 +90,12 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     last_h: Mat6<T>,
     last_dt: T,
     delay_steps: usize,
+    /// Online latency estimate (when `estimate_aiding_delay`).
+    delay_estimator: DelayEstimator<T>,
+    /// The lag the nominal bias and inflation were learnt at.
+    learned_lag: usize,
+    /// Heading offset of the attitude aiding (`heading.rs`).
+    heading: heading::HeadingEstimator<T>,
     history: heapless::HistoryBuf<StateVec<T>, { MAX_DELAY_STEPS + 1 }>,
     report: UkfReport<T>,
 }
@@ -140,6 +154,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             last_h: Mat6::identity(),
             last_dt: cfg.imu_period,
             delay_steps: (cfg.aiding_delay_s / cfg.imu_period).round().to_f64() as usize,
+            delay_estimator: DelayEstimator::new(),
+            learned_lag: 0,
+            heading: heading::HeadingEstimator::new(),
             history: heapless::HistoryBuf::new(),
             report: UkfReport::default(),
             cfg,
@@ -170,6 +187,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// The underlying filter.
     pub fn filter(&self) -> &Ukf<T, NX, 13> {
         &self.ukf
+    }
+    /// The aiding latency the monitor fuses at, s: the configured one, or
+    /// with [`estimate_aiding_delay`](UkfMonitorConfig::estimate_aiding_delay)
+    /// the online estimate (a multiple of the IMU period, at most
+    /// [`MAX_DELAY_STEPS`] periods).
+    pub fn aiding_delay_estimate(&self) -> T {
+        T::lit(self.delay_steps as f64) * self.cfg.imu_period
     }
     /// Clears latched fault decisions (explicit operator reset).
     pub fn reset_faults(&mut self) {
@@ -339,9 +363,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // every update, while it saves a 6×6 product per IMU period.
         self.sensitivity += VehicleModel::mul_state_jacobian(&a, &(self.sensitivity * dt)) + b * dt;
         self.last_input_b = b;
-        // The state history only serves a configured aiding latency.
-        if self.delay_steps > 0 {
+        // The state history serves a configured or estimated aiding latency.
+        if self.keeps_history() {
             self.history.write(*self.ukf.state());
+            self.delay_estimator.tick();
+            self.heading.tick();
         }
         Ok(reset)
     }
@@ -356,7 +382,20 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let h = self.meas.jacobian(&x_prior, omega);
         let r = self.cfg.meas_sigma.component_mul(&self.cfg.meas_sigma);
         let meas = self.meas;
+        let corrected;
+        let aiding = if self.cfg.estimate_heading_offset {
+            corrected = self.correct_heading(aiding);
+            &corrected
+        } else {
+            aiding
+        };
         let available = usable_aiding(aiding);
+        if self.cfg.estimate_heading_offset {
+            self.learn_heading_offset(aiding, omega);
+        }
+        if self.cfg.estimate_aiding_delay {
+            self.estimate_delay(aiding, &available, omega);
+        }
         // With a known latency, predict the measurement from the state of its
         // time (the history holds one state per IMU step, newest last).
         let delayed = if self.delay_steps > 0 {
@@ -442,11 +481,17 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.sensitivity -= out.gain * hx;
         // The correction moved the current state: shift the history with it so
         // the next delayed measurement sees a consistent past.
-        if self.delay_steps > 0 {
+        if self.keeps_history() {
             self.shift_history(&x_prior);
         }
         self.last_h = h;
         Ok((rejected, out.covariance_reset.is_some()))
+    }
+
+    /// The state history serves a configured or estimated aiding latency
+    /// and the heading-offset estimate.
+    fn keeps_history(&self) -> bool {
+        self.delay_steps > 0 || self.cfg.estimate_aiding_delay || self.cfg.estimate_heading_offset
     }
 
     #[inline(never)] // keeps the copy of the history off `update`'s frame
@@ -477,6 +522,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             Some(Phase::Learning) => {
                 self.phase = Phase::Learning;
                 self.learn_clock = self.phase_time;
+                self.learned_lag = self.delay_steps;
             }
             Some(Phase::Monitoring) => {
                 self.phase = Phase::Monitoring;
@@ -488,6 +534,25 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             }
             _ => {}
         }
+    }
+
+    /// During learning, starts it again (an aiding-timing or heading
+    /// estimate moved: what was learnt so far fits the old one); once
+    /// monitoring, does nothing, since a restart would absorb whatever fault
+    /// is present into the nominal bias.
+    fn restart_learning(&mut self) {
+        if self.phase != Phase::Learning {
+            return;
+        }
+        self.phase_time = self.cfg.converge_s;
+        self.learn_clock = self.phase_time;
+        self.inflation_sum = [T::zero(); NZ];
+        self.inflation_n = [T::zero(); NZ];
+        self.inflation = [T::one(); NZ];
+        for w in self.windows.iter_mut() {
+            w.clear();
+        }
+        self.persistence.reset();
     }
 
     #[inline(never)] // own stack frame and one copy (issue 17)

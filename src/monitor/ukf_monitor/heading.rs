@@ -1,0 +1,213 @@
+//! A constant heading offset between the attitude aiding's frame and the
+//! IMU's (issue 15): a mis-surveyed GNSS antenna baseline, an AHRS or
+//! compass mounted a few degrees off. Fused as is, the offset turns the
+//! filter's heading by (most of) it, so the NED velocity it propagates from
+//! the accelerometers turns away from the GNSS velocity whenever the
+//! vehicle accelerates, and the innovations this leaves look like sensor
+//! faults (measured: 3° gives ≈ 220 false-alarm events per hour on the
+//! aircraft).
+//!
+//! The yaw innovation says little (the filter follows the 0.2° yaw aiding);
+//! the velocity says it: over a block of [`HEADING_BLOCK_EPOCHS`] aiding
+//! epochs, the horizontal change of the GNSS velocity `Δz` and the change
+//! of the filter's predicted velocity `Δh` (IMU propagation alone: the
+//! per-epoch changes of the state history telescope over the block, as in
+//! `delay.rs`) differ by the rotation `e` between the filter's heading and
+//! the truth: `Δz ≈ R(−e)·Δh`. The least-squares angle over the blocks is
+//! `ê = −Σ(Δh × Δz) / Σ|Δh|²`, with standard error `σ_v·√2 / √Σ|Δh|²`.
+//! When `ê` is significant (beyond three standard errors) it is added to
+//! the offset, which is taken off the yaw aiding before fusion, and the
+//! sums restart; a residual too small to be significant keeps
+//! accumulating until it is. Only horizontal manoeuvres inform `ê`: in
+//! straight flight the sums do not grow and nothing is applied. Learning
+//! pauses while a fault is flagged (an accelerometer fault turns `Δh` as
+//! well), and the estimate is bounded to ±[`HEADING_OFFSET_MAX_DEG`]:
+//! larger is a mounting error to fix, not to learn. While learning, each
+//! applied step restarts learning, so monitoring begins at a settled
+//! offset once the vehicle has manoeuvred (in straight flight nothing is
+//! applied and learning ends as usual). Needs the aiding's
+//! velocity in NED (GNSS, M2); with body-frame DVL velocity (M1) the
+//! heading does not enter the velocity and nothing is learnt.
+
+use super::{UkfMonitor, MAX_DELAY_STEPS};
+use crate::math::{wrap_pi, Real};
+use crate::model::{AidingKind, MeasVec, Measurement, YAW};
+use crate::monitor::{ChannelState, Phase};
+
+/// Aiding epochs per block (2 s at 10 Hz).
+const HEADING_BLOCK_EPOCHS: u16 = 20;
+/// Largest offset learnt, degrees.
+const HEADING_OFFSET_MAX_DEG: f64 = 10.0;
+/// Significance of an applied step, standard errors.
+const HEADING_SIGNIFICANCE: f64 = 3.0;
+/// Largest standard error of an applied step, degrees: a block or two of
+/// manoeuvre is not enough, whatever its noise says, because the filter's
+/// own transients after a step are not noise.
+const HEADING_MAX_SE_DEG: f64 = 0.5;
+/// Fraction of a significant angle applied per step: the filter's heading
+/// follows a changed aiding over a few seconds, and the next blocks measure
+/// what is left.
+const HEADING_GAIN: f64 = 0.5;
+
+/// Block sums of the horizontal velocity changes and the least-squares
+/// sums over blocks.
+#[derive(Debug, Clone)]
+pub(super) struct HeadingEstimator<T> {
+    /// Learnt offset, rad.
+    pub(super) offset: T,
+    /// Previous horizontal GNSS velocity and IMU periods since it.
+    prev: Option<([T; 2], usize)>,
+    block_z: [T; 2],
+    block_h: [T; 2],
+    block_epochs: u16,
+    /// Sums over blocks: count, `Σ Δh`, `Σ Δz`, `Σ Δh × Δz`, `Σ |Δh|²`.
+    n: T,
+    sum_h: [T; 2],
+    sum_z: [T; 2],
+    cross: T,
+    dot: T,
+}
+
+impl<T: Real> HeadingEstimator<T> {
+    pub(super) fn new() -> Self {
+        Self {
+            offset: T::zero(),
+            prev: None,
+            block_z: [T::zero(); 2],
+            block_h: [T::zero(); 2],
+            block_epochs: 0,
+            n: T::zero(),
+            sum_h: [T::zero(); 2],
+            sum_z: [T::zero(); 2],
+            cross: T::zero(),
+            dot: T::zero(),
+        }
+    }
+
+    /// One IMU period passed.
+    pub(super) fn tick(&mut self) {
+        if let Some((_, age)) = self.prev.as_mut() {
+            *age = age.saturating_add(1);
+        }
+    }
+
+    fn interrupt(&mut self) {
+        self.prev = None;
+        self.block_z = [T::zero(); 2];
+        self.block_h = [T::zero(); 2];
+        self.block_epochs = 0;
+    }
+}
+
+impl<T: Real, const W: usize> UkfMonitor<T, W> {
+    /// The aiding with the learnt offset taken off its yaw.
+    pub(super) fn correct_heading(&self, aiding: &Measurement<T>) -> Measurement<T> {
+        let mut m = *aiding;
+        if let Some(z) = m.z.get_mut(YAW) {
+            *z = wrap_pi(*z - self.heading.offset);
+        }
+        m
+    }
+
+    /// The heading offset between the attitude aiding and the IMU frame
+    /// learnt so far, rad (0 unless
+    /// [`estimate_heading_offset`](super::UkfMonitorConfig::estimate_heading_offset)).
+    pub fn heading_offset_estimate(&self) -> T {
+        self.heading.offset
+    }
+
+    /// Before an update: one epoch of horizontal velocity changes.
+    #[inline(never)] // own stack frame and one copy (issue 17)
+    pub(super) fn learn_heading_offset(
+        &mut self,
+        aiding: &Measurement<T>,
+        omega: &nalgebra::Vector3<T>,
+    ) {
+        let flagged = self
+            .report
+            .status
+            .iter()
+            .any(|s| matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative));
+        let learning = matches!(self.phase, Phase::Learning | Phase::Monitoring);
+        let has_vel = aiding.available.iter().take(2).all(|a| *a);
+        if flagged || !learning || self.cfg.aiding != AidingKind::GnssAttitude {
+            self.heading.interrupt();
+            return;
+        }
+        if !has_vel {
+            return;
+        }
+        let z = [aiding.z.x, aiding.z.y];
+        let prev = self.heading.prev.replace((z, 0));
+        let Some((z0, age)) = prev else { return };
+        // The history's states at the fusion lag and one aiding interval
+        // before it (newest first).
+        let lag = self.delay_steps;
+        if lag + age > MAX_DELAY_STEPS {
+            self.heading.interrupt();
+            return;
+        }
+        let mut now = None;
+        let mut then = None;
+        for (k, x) in self.history.oldest_ordered().rev().enumerate() {
+            if k == lag {
+                now = Some(*x);
+            }
+            if k == lag + age {
+                then = Some(*x);
+            }
+        }
+        let (Some(now), Some(then)) = (now, then) else {
+            self.heading.interrupt();
+            return;
+        };
+        let (a, b): (MeasVec<T>, MeasVec<T>) = (
+            self.meas.predict(&now, omega),
+            self.meas.predict(&then, omega),
+        );
+        let h = &mut self.heading;
+        h.block_z[0] += z[0] - z0[0];
+        h.block_z[1] += z[1] - z0[1];
+        h.block_h[0] += a.x - b.x;
+        h.block_h[1] += a.y - b.y;
+        h.block_epochs += 1;
+        if h.block_epochs < HEADING_BLOCK_EPOCHS {
+            return;
+        }
+        let [hn, he] = h.block_h;
+        let [zn, ze] = h.block_z;
+        h.n += T::one();
+        h.sum_h = [h.sum_h[0] + hn, h.sum_h[1] + he];
+        h.sum_z = [h.sum_z[0] + zn, h.sum_z[1] + ze];
+        h.cross += hn * ze - he * zn;
+        h.dot += hn * hn + he * he;
+        h.block_z = [T::zero(); 2];
+        h.block_h = [T::zero(); 2];
+        h.block_epochs = 0;
+        // Centred sums: a constant NED offset of the blocks (a residual
+        // accelerometer bias or tilt error over a straight leg) drops out.
+        let [sh_n, sh_e] = h.sum_h;
+        let [sz_n, sz_e] = h.sum_z;
+        let cross = h.cross - (sh_n * sz_e - sh_e * sz_n) / h.n;
+        let dot = h.dot - (sh_n * sh_n + sh_e * sh_e) / h.n;
+        if h.n < T::lit(2.0) || dot <= T::zero() {
+            return;
+        }
+        let e = -cross / dot;
+        let sigma = self.cfg.meas_sigma.x.max(self.cfg.meas_sigma.y);
+        let se = sigma * T::lit(core::f64::consts::SQRT_2) / dot.sqrt_fast();
+        if e.abs() > T::lit(HEADING_SIGNIFICANCE) * se
+            && se < T::lit(HEADING_MAX_SE_DEG.to_radians())
+        {
+            let max = T::lit(HEADING_OFFSET_MAX_DEG.to_radians());
+            h.offset = (h.offset + e * T::lit(HEADING_GAIN)).max(-max).min(max);
+            h.n = T::zero();
+            h.sum_h = [T::zero(); 2];
+            h.sum_z = [T::zero(); 2];
+            h.cross = T::zero();
+            h.dot = T::zero();
+            // Learning started against the old offset: start it again.
+            self.restart_learning();
+        }
+    }
+}
