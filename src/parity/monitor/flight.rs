@@ -6,7 +6,7 @@ use nalgebra::{SVector, Vector3};
 
 use crate::math::Real;
 
-use super::super::multiscale::{Multiscale, MultiscaleDecision, REGRESSORS};
+use super::super::multiscale::{BlockStage, Multiscale, Outcome, REGRESSORS};
 use super::{ParityMonitor, ParityReport};
 
 /// Sums over the block being accumulated for the multi-scale tests.
@@ -36,7 +36,8 @@ impl<T: Real, const N: usize> Default for BlockSums<T, N> {
 
 impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// Accumulates one sample into the multi-scale block; a complete block
-    /// processes the one before it (whose centred difference is now known).
+    /// starts the work on the one before it (whose centred difference is
+    /// now known).
     pub(super) fn multiscale_sample(
         &mut self,
         m: &SVector<T, N>,
@@ -62,29 +63,32 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let mean = b.m / n;
         let eb = (b.mm / n - mean.component_mul(&mean)).map(|v| v.max(T::zero()));
         self.ms_block = BlockSums::default();
+        // Blocks shorter than the stages: the work in progress ends now.
+        if self.ms.as_ref().is_some_and(|ms| ms.pending().is_some()) {
+            if self.multiscale_advance(true, report) {
+                // It reconfigured: this block is from the old space.
+                return;
+            }
+        }
         if let (Some((p_prev, x_prev, e_prev)), Some(x_before)) = (self.ms_prev, self.ms_prev2) {
             let dx = (xb - x_before) * T::lit(0.5);
-            self.multiscale_block(&p_prev, &x_prev, &dx, &e_prev, report);
+            self.multiscale_block(&p_prev, &x_prev, &dx, &e_prev);
         }
         self.ms_prev2 = self.ms_prev.map(|(_, x, _)| x);
         self.ms_prev = Some((pb, xb, eb));
     }
 
-    /// One block through the multi-scale tests: training (first two thirds
-    /// calibrate, the last third measures the residual's covariance), then
-    /// a decision per block, with isolation after `isolate_after` agreeing
-    /// decisions whose hypothesis beats the runner-up by the margin.
+    /// Starts one block through the multi-scale tests: training (first two
+    /// thirds calibrate, at once; the last third measures the residual's
+    /// covariance), or a decision, in stages.
     fn multiscale_block(
         &mut self,
         p: &SVector<T, N>,
         x: &Vector3<T>,
         dx: &Vector3<T>,
         e: &SVector<T, N>,
-        report: &mut ParityReport<T, N>,
     ) {
         let train_blocks = (self.cfg.train_samples / u32::from(self.cfg.block_len.max(1))).max(12);
-        let cfg = self.cfg.multiscale;
-        let v = *self.space.v();
         let active = *self.space.active();
         let Some(ms) = self.ms.as_mut() else {
             return;
@@ -101,45 +105,56 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         // The block's vibration level: the RMS spread of the sensors within
         // it (what the residual's variance follows, see `multiscale::scale`).
         let level = e.sum().max(T::zero()).sqrt();
-        if !self.ms_trained {
-            self.ms_blocks = self.ms_blocks.saturating_add(1);
-            if self.ms_blocks <= train_blocks * 2 / 3 {
-                ms.learn_calibration(p, &phi, false);
-                return;
-            }
-            if let Some(r) = ms.residual(p, &phi) {
-                ms.train_residual(&r, &phi, level);
-            }
+        if self.ms_trained {
+            ms.begin(p, &phi, level, None);
+            return;
+        }
+        self.ms_blocks = self.ms_blocks.saturating_add(1);
+        if self.ms_blocks <= train_blocks * 2 / 3 {
             ms.learn_calibration(p, &phi, false);
-            if self.ms_blocks >= train_blocks {
-                if ms.finish_training(train_blocks).is_some() {
-                    self.ms_trained = true;
-                } else {
-                    // Degenerate training data: start again.
-                    *ms = Multiscale::new(cfg, self.space.dim(), ms.threshold_set());
-                    self.ms_blocks = 0;
-                }
-            }
             return;
         }
-        let Some(mut d) = ms.decide(p, &phi, level, &v, &active) else {
-            return;
+        ms.begin(p, &phi, level, Some(self.ms_blocks >= train_blocks));
+    }
+
+    /// Runs one stage of the block in work (`to_end`: all of them) and
+    /// applies its outcome: the end of training, or the block's decision,
+    /// with isolation after `isolate_after` agreeing decisions whose
+    /// hypothesis beats the runner-up by the margin. True when it isolated
+    /// a sensor (the set changed).
+    pub(super) fn multiscale_advance(
+        &mut self,
+        to_end: bool,
+        report: &mut ParityReport<T, N>,
+    ) -> bool {
+        let cfg = self.cfg.multiscale;
+        let v = *self.space.v();
+        let active = *self.space.active();
+        let Some(ms) = self.ms.as_mut() else {
+            return false;
         };
-        // A relative bias the calibration holds beyond the offset limit is
-        // a fault present since power-up (or since training).
-        if d.ratio <= T::one() {
-            if let Some((k, bias, margin)) = ms.offset_fault(&v, &active) {
-                d = MultiscaleDecision {
-                    ratio: T::one() + T::lit(1e-3),
-                    scale: 0,
-                    suspect: Some(k),
-                    bias,
-                    margin,
-                    isolate: Some((k, margin)),
-                    learning: false,
-                };
-            }
+        if ms.pending().is_none() {
+            return false;
         }
+        let outcome = if to_end {
+            ms.finish(&v, &active)
+        } else {
+            ms.advance(&v, &active)
+        };
+        let d = match outcome {
+            Outcome::Busy | Outcome::Trained(None) | Outcome::Decided(None) => return false,
+            Outcome::Trained(Some(true)) => {
+                self.ms_trained = true;
+                return false;
+            }
+            Outcome::Trained(Some(false)) => {
+                // Degenerate training data: start again.
+                *ms = Multiscale::new(cfg, self.space.dim(), ms.threshold_set());
+                self.ms_blocks = 0;
+                return false;
+            }
+            Outcome::Decided(Some(d)) => d,
+        };
         report.decision = true;
         report.multiscale = d;
         // The alarm holds for one shortest window after the last decision
@@ -163,8 +178,14 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             if !above {
                 self.suspect_run = (None, 0);
             }
-            return;
+            return false;
         };
-        self.vote_to_isolate(k, report);
+        self.vote_to_isolate(k, report)
+    }
+
+    /// The stage of the multi-scale block in work the next step runs
+    /// (`None` when idle or with the white-noise tests).
+    pub fn pending_stage(&self) -> Option<BlockStage> {
+        self.ms.as_ref().and_then(|ms| ms.pending())
     }
 }

@@ -259,7 +259,9 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     }
 }
 
-/// Builds every threshold and projection for `space` from `baseline`.
+/// Builds every threshold and projection for `space` from `baseline`, all
+/// stages at once (training, calibration; a reconfiguration in flight runs
+/// them one per step, see [`TestsBuilder`]).
 pub(super) fn derive_tests<T: Real, const N: usize>(
     space: &ParitySpace<T, N>,
     baseline: Baseline<T, N>,
@@ -267,83 +269,172 @@ pub(super) fn derive_tests<T: Real, const N: usize>(
     scales: &[T; 3],
     chi2: &[T; N],
 ) -> Option<Tests<T, N>> {
-    let [glt_scale, pca_scale, cusum_scale] = *scales;
-    let dim = space.dim();
-    if dim == 0 {
-        return None;
-    }
-    // Pad the unused block with identity so the factorisation is full rank.
-    let padded = SMatrix::<T, N, N>::from_fn(|i, j| {
-        if i < dim && j < dim {
-            at(&baseline.block_cov, i, j)
-        } else if i == j {
-            T::one()
-        } else {
-            T::zero()
-        }
-    });
-    let l = cholesky(&padded).ok()?;
-    let mut cov_inv = cholesky_solve_right(&l, &SMatrix::<T, N, N>::identity());
-    let mut a = cholesky_solve_right(&l, &space.v().transpose()).transpose();
-    for i in dim..N {
-        cov_inv.row_mut(i).fill(T::zero());
-        cov_inv.column_mut(i).fill(T::zero());
-        a.row_mut(i).fill(T::zero());
-    }
-    let q: [T; N] = core::array::from_fn(|k| {
-        if space.detectable(k) {
-            space.v().column(k).dot(&a.column(k))
-        } else {
-            T::zero()
-        }
-    });
-    let margin = cfg.threshold_margin;
-    let glt_threshold = *chi2.get(dim)? * margin * glt_scale;
-    let (values, vectors) = symmetric_eigen(&SMatrix::<T, N, N>::from_fn(|i, j| {
-        if i < dim && j < dim {
-            at(&baseline.block_cov, i, j)
-        } else {
-            T::zero()
-        }
-    }))?;
-    let pca_dims = dim.min(2);
-    let mut pca_basis = SMatrix::<T, N, 2>::zeros();
-    let mut pca_var = [T::zero(); 2];
-    for c in 0..pca_dims {
-        pca_basis.set_column(c, &vectors.column(c));
-        if let Some(v) = pca_var.get_mut(c) {
-            *v = values.get(c).copied().unwrap_or(T::zero());
+    let mut b = TestsBuilder::new(baseline);
+    loop {
+        match b.stage(space, cfg, scales, chi2) {
+            Build::Busy => {}
+            Build::Done(t) => return t,
         }
     }
-    let pca_threshold = *chi2.get(pca_dims)? * margin * pca_scale;
-    let mut kappa = [T::zero(); N];
-    let mut cusum_h = [T::zero(); N];
-    for k in 0..N {
-        let (Some(&qk), Some(kk), Some(hk)) = (q.get(k), kappa.get_mut(k), cusum_h.get_mut(k))
+}
+
+/// Progress of a [`TestsBuilder`].
+pub(super) enum Build<T: Real, const N: usize> {
+    /// More stages to run.
+    Busy,
+    /// The tests (`None`: the baseline does not give any).
+    Done(Option<Tests<T, N>>),
+}
+
+/// The tests of a parity space built in stages of bounded cost (issue 17):
+/// the covariance's factor and the projections, the PCA basis, then the
+/// CUSUM threshold of one sensor per stage (a software-`f64` root search
+/// each on the M4F).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct TestsBuilder<T: Real, const N: usize> {
+    t: Tests<T, N>,
+    /// Next stage: 0 projections, 1 PCA, `2 + k` sensor k's CUSUM.
+    next: usize,
+}
+
+impl<T: Real, const N: usize> TestsBuilder<T, N> {
+    pub(super) fn new(baseline: Baseline<T, N>) -> Self {
+        Self {
+            t: Tests {
+                baseline,
+                cov_inv: SMatrix::zeros(),
+                a: SMatrix::zeros(),
+                q: [T::zero(); N],
+                glt_threshold: T::zero(),
+                pca_basis: SMatrix::zeros(),
+                pca_var: [T::zero(); 2],
+                pca_threshold: T::zero(),
+                kappa: [T::zero(); N],
+                cusum_h: [T::zero(); N],
+            },
+            next: 0,
+        }
+    }
+
+    /// Runs the next stage.
+    pub(super) fn stage(
+        &mut self,
+        space: &ParitySpace<T, N>,
+        cfg: &ParityConfig<T>,
+        scales: &[T; 3],
+        chi2: &[T; N],
+    ) -> Build<T, N> {
+        let stage = self.next;
+        self.next += 1;
+        let ok = match stage {
+            0 => self.projections(space, cfg, scales, chi2),
+            1 => self.pca(space, cfg, scales, chi2),
+            _ => {
+                let k = stage - 2;
+                if k >= N {
+                    return Build::Done(Some(self.t));
+                }
+                self.cusum(k, cfg, scales)
+            }
+        };
+        if ok.is_none() {
+            return Build::Done(None);
+        }
+        Build::Busy
+    }
+
+    /// `Σ_b⁻¹`, `a_k = Σ_b⁻¹ v_k`, `q_k` and the GLT threshold.
+    fn projections(
+        &mut self,
+        space: &ParitySpace<T, N>,
+        cfg: &ParityConfig<T>,
+        scales: &[T; 3],
+        chi2: &[T; N],
+    ) -> Option<()> {
+        let dim = space.dim();
+        if dim == 0 {
+            return None;
+        }
+        let block_cov = &self.t.baseline.block_cov;
+        // Pad the unused block with identity so the factorisation is full rank.
+        let padded = SMatrix::<T, N, N>::from_fn(|i, j| {
+            if i < dim && j < dim {
+                at(block_cov, i, j)
+            } else if i == j {
+                T::one()
+            } else {
+                T::zero()
+            }
+        });
+        let l = cholesky(&padded).ok()?;
+        let mut cov_inv = cholesky_solve_right(&l, &SMatrix::<T, N, N>::identity());
+        let mut a = cholesky_solve_right(&l, &space.v().transpose()).transpose();
+        for i in dim..N {
+            cov_inv.row_mut(i).fill(T::zero());
+            cov_inv.column_mut(i).fill(T::zero());
+            a.row_mut(i).fill(T::zero());
+        }
+        self.t.q = core::array::from_fn(|k| {
+            if space.detectable(k) {
+                space.v().column(k).dot(&a.column(k))
+            } else {
+                T::zero()
+            }
+        });
+        self.t.cov_inv = cov_inv;
+        self.t.a = a;
+        self.t.glt_threshold = *chi2.get(dim)? * cfg.threshold_margin * scales[0];
+        Some(())
+    }
+
+    /// The PCA pattern test's basis, variances and threshold.
+    fn pca(
+        &mut self,
+        space: &ParitySpace<T, N>,
+        cfg: &ParityConfig<T>,
+        scales: &[T; 3],
+        chi2: &[T; N],
+    ) -> Option<()> {
+        let dim = space.dim();
+        let block_cov = &self.t.baseline.block_cov;
+        let (values, vectors) = symmetric_eigen(&SMatrix::<T, N, N>::from_fn(|i, j| {
+            if i < dim && j < dim {
+                at(block_cov, i, j)
+            } else {
+                T::zero()
+            }
+        }))?;
+        let pca_dims = dim.min(2);
+        for c in 0..pca_dims {
+            self.t.pca_basis.set_column(c, &vectors.column(c));
+            if let Some(v) = self.t.pca_var.get_mut(c) {
+                *v = values.get(c).copied().unwrap_or(T::zero());
+            }
+        }
+        self.t.pca_threshold = *chi2.get(pca_dims)? * cfg.threshold_margin * scales[1];
+        Some(())
+    }
+
+    /// Sensor `k`'s CUSUM reference and threshold.
+    fn cusum(&mut self, k: usize, cfg: &ParityConfig<T>, scales: &[T; 3]) -> Option<()> {
+        let t = &mut self.t;
+        let (Some(&qk), Some(kk), Some(hk)) =
+            (t.q.get(k), t.kappa.get_mut(k), t.cusum_h.get_mut(k))
         else {
-            continue;
+            return Some(());
         };
         if qk <= T::zero() {
-            continue;
+            return Some(());
         }
         // A bias b on sensor k shifts the standardised projection by b·√q_k.
         let shift = (cfg.cusum_bias * qk.sqrt()).to_f64();
         let kappa_k = 0.5 * shift;
         *kk = T::lit(kappa_k);
-        *hk = T::lit(cusum_threshold(kappa_k, cfg.cusum_arl0).ok()?) * margin * cusum_scale;
+        *hk = T::lit(cusum_threshold(kappa_k, cfg.cusum_arl0).ok()?)
+            * cfg.threshold_margin
+            * scales[2];
+        Some(())
     }
-    Some(Tests {
-        baseline,
-        cov_inv,
-        a,
-        q,
-        glt_threshold,
-        pca_basis,
-        pca_var,
-        pca_threshold,
-        kappa,
-        cusum_h,
-    })
 }
 
 fn at<T: Real, const N: usize>(m: &SMatrix<T, N, N>, i: usize, j: usize) -> T {

@@ -53,11 +53,13 @@ use crate::stats::{student_t_cornish_fisher, student_t_upper_quantile};
 mod config;
 mod glr;
 mod scale;
+mod staged;
 mod training;
 
 pub use config::MultiscaleConfig;
-use glr::{best_two, mahalanobis2, pad};
+use glr::{best_two, pad};
 use scale::VibrationScale;
+pub use staged::{BlockStage, Outcome, STAGES};
 
 /// Sensors whose own vibration energy is a regressor (the first nine).
 pub const VIBRATION_REGRESSORS: usize = 9;
@@ -145,6 +147,8 @@ pub struct Multiscale<T: Real, const N: usize, const W: usize> {
     z: T,
     /// Residual blocks the training covariance rests on.
     trained_blocks: u32,
+    /// The block in work, one stage per monitor step.
+    work: staged::Work<T, N>,
 }
 
 impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
@@ -195,6 +199,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                 .map(T::lit)
                 .unwrap_or(T::zero()),
             trained_blocks: 0,
+            work: staged::Work::default(),
         }
     }
 
@@ -253,13 +258,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         cholesky(&a).ok()
     }
 
-    /// Prior residual `p̄ − C φ` of a block (before it is learned) and the
-    /// Cholesky factor used, `None` when the calibration cannot be solved.
-    pub fn residual(&self, p: &SVector<T, N>, phi: &Phi<T>) -> Option<SVector<T, N>> {
-        self.residual_with(&self.calibration_factor()?, p, phi)
-    }
-
-    /// [`residual`](Self::residual) with the calibration's factor given.
+    /// Prior residual `p̄ − C φ` of a block (before it is learned), with the
+    /// calibration's Cholesky factor `l`; `None` when not finite.
     fn residual_with(
         &self,
         l: &SMatrix<T, REGRESSORS, REGRESSORS>,
@@ -386,140 +386,6 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         (bias.abs() > self.cfg.offset_limit).then_some((k, bias, margin))
     }
 
-    /// One monitoring block with parity vector `p` and regressor `phi`:
-    /// clips and stores its prior residual, tests every window length, and
-    /// learns from the block when every score is quiet. `None` when the
-    /// calibration cannot be solved (the block is skipped).
-    pub fn decide(
-        &mut self,
-        p: &SVector<T, N>,
-        phi: &Phi<T>,
-        level: T,
-        v: &SMatrix<T, N, N>,
-        active: &[bool; N],
-    ) -> Option<MultiscaleDecision<T>> {
-        // One factorisation of the calibration per block: the residual and
-        // the prediction variance of every window length use it (it changes
-        // only when the block is learned, at the end).
-        let cal = self.calibration_factor()?;
-        let raw_r = self.residual_with(&cal, p, phi)?;
-        // Standardised by the residual energy this vibration level predicts
-        // (see `scale`): the tests below all run on `r`.
-        let energy = self.scale.predict(level);
-        let gain = T::one() / energy.sqrt();
-        let r = &(raw_r * gain);
-        let mut out = MultiscaleDecision::default();
-        let Ok(lb) = cholesky(&self.block_cov) else {
-            return Some(out);
-        };
-        // Huber: bound the block's Mahalanobis norm.
-        let norm2 = mahalanobis2(&lb, r);
-        let norm = norm2.sqrt();
-        let bound = T::lit(self.dim as f64).sqrt() + self.cfg.huber;
-        let clipped = if norm > bound && norm.finite() {
-            r * (bound / norm)
-        } else {
-            *r
-        };
-        self.push(&clipped, &raw_r, phi, gain, level);
-        let means = self.window_means();
-        let mut best_ratio = T::zero();
-        let mut isolate: Option<(usize, T)> = None;
-        for (i, ((m, cov), (h_steady, len))) in means
-            .iter()
-            .zip(self.window_cov.iter())
-            .zip(self.scale_h.iter().zip(self.cfg.scales.iter()))
-            .enumerate()
-        {
-            let Some((rbar, phibar, gbar)) = m else {
-                continue;
-            };
-            let h = &self.early_threshold(*h_steady, *len);
-            let total = cov + self.block_cov * Self::prediction_weight(Some(&cal), phibar);
-            let Ok(l) = cholesky(&pad(&total, self.dim)) else {
-                continue;
-            };
-            let (best, second) = best_two(&l, v, rbar, active);
-            let Some((k, score, bias)) = best else {
-                continue;
-            };
-            let ratio = score / *h;
-            let margin = score - second;
-            if ratio > T::one() && isolate.is_none_or(|(_, m)| margin > m) {
-                isolate = Some((k, margin));
-            }
-            if ratio > best_ratio || out.suspect.is_none() {
-                best_ratio = ratio;
-                out = MultiscaleDecision {
-                    ratio,
-                    scale: i,
-                    suspect: Some(k),
-                    // Back to sensor units: a bias b shows as b × mean gain.
-                    bias: bias / gbar.max(T::lit(1e-6)),
-                    margin,
-                    isolate: None,
-                    learning: false,
-                };
-            }
-        }
-        // Gross test: the shortest window unclipped, at `gross_factor` × the
-        // threshold.
-        let short = usize::from(self.cfg.scales[0]);
-        if let (Some(rbar), Some(cov)) = (self.raw_mean(short), self.window_cov.first()) {
-            if let Ok(l) = cholesky(&pad(cov, self.dim)) {
-                let (best, second) = best_two(&l, v, &rbar, active);
-                if let Some((k, score, bias)) = best {
-                    let h0 = self.scale_h.first().copied().unwrap_or(T::lit(1e6));
-                    let ratio = score / (h0 * self.cfg.gross_factor);
-                    if ratio > T::one() && ratio > best_ratio {
-                        best_ratio = ratio;
-                        out.ratio = ratio;
-                        out.scale = 0;
-                        out.suspect = Some(k);
-                        out.bias = bias;
-                        out.margin = score - second;
-                        isolate = Some((k, score - second));
-                    }
-                }
-            }
-        }
-        out.isolate = isolate;
-        if !best_ratio.finite() {
-            out.ratio = T::zero();
-            out.suspect = None;
-            return Some(out);
-        }
-        // Learn only from quiet blocks, and only once the longest window
-        // has been quiet throughout (a fault's onset must not be learned
-        // before it is visible).
-        if best_ratio < self.cfg.learn_below {
-            self.quiet_blocks = self.quiet_blocks.saturating_add(1);
-        } else {
-            self.quiet_blocks = 0;
-        }
-        let longest = u32::from(self.cfg.scales[SCALES - 1]);
-        if self.quiet_blocks > longest {
-            out.learning = true;
-            self.learn_calibration(p, phi, true);
-            self.updates = self.updates.saturating_add(1);
-            let w = T::one() / T::lit(f64::from(self.updates)).min(self.cfg.variance_blocks);
-            let d = clipped * clipped.transpose();
-            self.block_cov = pad(&(self.block_cov * (T::one() - w) + d * w), self.dim);
-            // The block's raw energy in block-covariance units.
-            let dimf = T::lit(self.dim.max(1) as f64);
-            self.scale.learn(level, energy * norm2 / dimf, w);
-            for (cov, m) in self.window_cov.iter_mut().zip(means.iter()) {
-                if let Some((rbar, _, _)) = m {
-                    *cov = pad(
-                        &(*cov * (T::one() - w) + rbar * rbar.transpose() * w),
-                        self.dim,
-                    );
-                }
-            }
-        }
-        Some(out)
-    }
-
     /// The threshold of a window of `len` blocks now: the squared t
     /// quantile with the degrees of freedom its covariance has so far — at
     /// most those of the training's block covariance it started from
@@ -555,6 +421,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// parity vectors to the sub-space's (`p_new = c p`), `dim` is the new
     /// dimension.
     pub fn transform(&mut self, c: &SMatrix<T, N, N>, dim: usize) {
+        // A block in work belongs to the old space.
+        self.cancel();
         self.dim = dim;
         self.spx = c * self.spx;
         self.block_cov = pad(&(c * self.block_cov * c.transpose()), dim);

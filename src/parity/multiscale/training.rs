@@ -13,8 +13,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// [`train_residual`](Self::train_residual)) give the block covariance;
     /// each window length starts from the block covariance scaled by the
     /// correlation seen over the shortest window, with the weight of
-    /// `train_blocks` observations. `None` if degenerate.
-    pub fn finish_training(&mut self, train_blocks: u32) -> Option<()> {
+    /// the training blocks' observations. `None` if degenerate.
+    pub fn finish_training(&mut self) -> Option<()> {
         let n = self.filled;
         if n < 8 {
             return None;
@@ -85,7 +85,6 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         // `variance_blocks`; the thresholds follow the degrees of freedom.
         self.updates = n as u32;
         self.trained_blocks = n as u32;
-        let _ = train_blocks;
         Some(())
     }
 
