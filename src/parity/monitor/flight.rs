@@ -127,19 +127,21 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         to_end: bool,
         report: &mut ParityReport<T, N>,
     ) -> bool {
+        if !self.configured() {
+            return false;
+        }
         let cfg = self.cfg.multiscale;
-        let v = *self.space.v();
-        let active = *self.space.active();
         let Some(ms) = self.ms.as_mut() else {
             return false;
         };
         if ms.pending().is_none() {
             return false;
         }
+        let (v, active) = (self.space.v(), self.space.active());
         let outcome = if to_end {
-            ms.finish(&v, &active)
+            ms.finish(v, active)
         } else {
-            ms.advance(&v, &active)
+            ms.advance(v, active)
         };
         let d = match outcome {
             Outcome::Busy | Outcome::Trained(None) | Outcome::Decided(None) => return false,
@@ -183,9 +185,13 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         self.vote_to_isolate(k, report)
     }
 
-    /// The stage of the multi-scale block in work the next step runs
-    /// (`None` when idle or with the white-noise tests).
+    /// The stage of deferred work the next step runs: a reconfiguration
+    /// after an isolation or a failure (both detectors), or the multi-scale
+    /// block in work; `None` when there is none.
     pub fn pending_stage(&self) -> Option<BlockStage> {
+        if !self.configured() {
+            return Some(BlockStage::Reconfigure(self.reconfig_stage()));
+        }
         self.ms.as_ref().and_then(|ms| ms.pending())
     }
 }

@@ -13,6 +13,7 @@ use super::multiscale::{Multiscale, MultiscaleDecision};
 use super::space::invert_rank3;
 use super::training::{Baseline, Trainer};
 use super::{ConfigError, Geometry, ParitySpace};
+pub use reconfig::reconfig_steps;
 
 mod flight;
 mod reconfig;
@@ -20,7 +21,7 @@ mod white;
 
 use flight::BlockSums;
 use reconfig::Reconfig;
-use white::{derive_tests, Tests};
+use white::Tests;
 
 /// Monitor phase.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -332,11 +333,12 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             }
         }
         report.fused = fuse_subset(self.space.geometry(), &m, &usable);
-        // One stage of the multi-scale block in work (issue 17: a block's
-        // work spread over the next block's samples); it may isolate and
-        // reconfigure, so it runs before this sample is projected.
-        self.multiscale_advance(false, &mut report);
+        // One stage of a reconfiguration in progress, or else of the
+        // multi-scale block in work (issue 17: a block's work spread over
+        // the next block's samples, which may isolate and reconfigure): both
+        // before this sample is projected.
         self.advance_reconfig(false);
+        self.multiscale_advance(false, &mut report);
         let all_active_usable = self
             .space
             .active()
@@ -344,6 +346,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             .zip(usable.iter())
             .all(|(a, u)| !a || *u);
         if all_active_usable
+            && self.configured()
             && matches!(
                 self.phase,
                 ParityPhase::Training | ParityPhase::Calibrating | ParityPhase::Monitoring
@@ -372,7 +375,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         }
         report.status = status;
         report.parity_dim = self.space.dim();
-        if let Some(t) = &self.tests {
+        if let Some(t) = self.tests.as_ref().filter(|_| self.configured()) {
             report.glt_threshold = t.glt_threshold;
             report.pca_threshold = t.pca_threshold;
         }
@@ -427,38 +430,13 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         self.ms_prev = None;
         self.ms_prev2 = None;
         self.ms_hold = 0;
-        if self.stage_reconfig(k) {
-            return;
-        }
-        let Some(sub) = self.reduced_space(k) else {
-            return;
-        };
-        let c = self.space.transition_to(&sub);
         if let Some(ms) = self.ms.as_mut() {
-            if self.ms_trained {
-                ms.transform(&c, sub.dim());
-            } else {
-                // Failed while training: train the reduced set.
-                *ms = Multiscale::new(self.cfg.multiscale, sub.dim(), ms.threshold_set());
-                self.ms_blocks = 0;
-            }
+            // The block in work belongs to the old space.
+            ms.cancel();
         }
-        if let Some(t) = self.tests {
-            let b = Baseline {
-                offset: c * t.baseline.offset,
-                leak: c * t.baseline.leak,
-                block_cov: c * t.baseline.block_cov * c.transpose(),
-                correlation_factor: t.baseline.correlation_factor,
-            };
-            self.tests = derive_tests(&sub, b, &self.cfg, &self.scales, &self.chi2);
-            if self.tests.is_none() {
-                self.phase = ParityPhase::Lost;
-            }
-        } else {
-            // Failed during training: start training the reduced set.
-            self.trainer = Trainer::new(self.cfg.train_samples, self.cfg.block_len, self.cfg.ridge);
-        }
-        self.space = sub;
+        // The reduced space and what carries into it: from the next step,
+        // in stages.
+        self.reconfig = Reconfig::Space(k);
     }
 
     /// The parity space without sensor `k` (already marked removed); `None`

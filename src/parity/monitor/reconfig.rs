@@ -1,41 +1,66 @@
-//! Reconfiguration of the white-noise tests after an isolation, in stages
-//! (issue 17): the reduced parity space, then the tests rebuilt one stage
-//! per step ([`TestsBuilder`]) instead of ≈ 168 k instructions in the step
-//! that isolated. The tests are idle meanwhile (their window and CUSUMs
-//! restart after a reconfiguration anyway), fusion goes on; the rebuilt
-//! tests are those the one-shot reconfiguration gave, in use `N + 3`
-//! steps later at most.
+//! Reconfiguration after an isolation or a failure, in stages (issue 17):
+//! the reduced parity space, then either the white-noise tests rebuilt
+//! ([`build_stage`]) or the multi-scale tests' learning carried into the
+//! new space, one stage per step, instead of all in the step that isolated.
+//! The white-noise tests' construction at the end of training and of
+//! calibration runs the same way (≈ 168 k instructions in one step
+//! before). The tests are idle meanwhile (their window and
+//! CUSUMs restart after a reconfiguration anyway) and fusion goes on; what
+//! the stages build is what the one-shot reconfiguration built, in use at
+//! most [`reconfig_steps`] steps later.
+
+use nalgebra::SMatrix;
 
 use crate::math::Real;
 
-use super::super::training::Baseline;
-use super::white::{Build, TestsBuilder};
+use super::super::multiscale::{Multiscale, TRANSFORM_PARTS};
+use super::super::training::{Baseline, Trainer};
+use super::white::{build_stage, build_stages, Newton};
 use super::{ParityMonitor, ParityPhase};
+
+/// Steps a reconfiguration takes at most with `N` sensors.
+pub const fn reconfig_steps(n: usize) -> usize {
+    let white = 1 + build_stages(n);
+    let multiscale = 1 + TRANSFORM_PARTS;
+    if white > multiscale {
+        white
+    } else {
+        multiscale
+    }
+}
 
 /// Reconfiguration in progress.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) enum Reconfig<T: Real, const N: usize> {
     /// None.
     Idle,
-    /// The space without sensor `k` next; `baseline` is the old space's.
-    Space(usize, Baseline<T, N>),
-    /// The tests of the new space, stage by stage.
-    Tests(TestsBuilder<T, N>),
+    /// The space without sensor `k` next.
+    Space(usize),
+    /// White-noise tests: build stage `.0` next (the tests in progress are
+    /// in `tests`); `.1`: at the end of training (a baseline that gives no
+    /// tests trains again instead of losing the monitor); `.2` the CUSUM
+    /// threshold's root search in progress.
+    Tests(usize, bool, Newton),
+    /// Multi-scale tests: part `.1` of carrying the learning through the
+    /// transition `.0` (`p_new = c p`).
+    Transform(SMatrix<T, N, N>, usize),
 }
 
 impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
-    /// Starts reconfiguring the white-noise tests without sensor `k`
-    /// (already marked removed); false when they are not running (training,
-    /// multi-scale tests): the caller reconfigures at once.
-    pub(super) fn stage_reconfig(&mut self, k: usize) -> bool {
-        if self.ms.is_some() {
-            return false;
-        }
-        let Some(t) = self.tests.take() else {
-            return false;
+    /// The tests run on this step (no reconfiguration in progress).
+    pub(super) fn configured(&self) -> bool {
+        matches!(self.reconfig, Reconfig::Idle)
+    }
+
+    /// Index of the reconfiguration stage next (see
+    /// [`BlockStage::Reconfigure`](crate::parity::BlockStage::Reconfigure)).
+    pub(super) fn reconfig_stage(&self) -> u8 {
+        let i = match self.reconfig {
+            Reconfig::Idle | Reconfig::Space(_) => 0,
+            Reconfig::Tests(stage, _, _) => 1 + stage,
+            Reconfig::Transform(_, part) => 1 + part,
         };
-        self.reconfig = Reconfig::Space(k, t.baseline);
-        true
+        u8::try_from(i).unwrap_or(u8::MAX)
     }
 
     /// Runs one stage of the reconfiguration in progress (`to_end`: all).
@@ -43,30 +68,40 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         loop {
             match self.reconfig {
                 Reconfig::Idle => return,
-                Reconfig::Space(k, baseline) => {
+                Reconfig::Space(k) => {
                     self.reconfig = Reconfig::Idle;
-                    if let Some(sub) = self.reduced_space(k) {
-                        let c = self.space.transition_to(&sub);
-                        let b = Baseline {
-                            offset: c * baseline.offset,
-                            leak: c * baseline.leak,
-                            block_cov: c * baseline.block_cov * c.transpose(),
-                            correlation_factor: baseline.correlation_factor,
-                        };
-                        self.space = sub;
-                        self.reconfig = Reconfig::Tests(TestsBuilder::new(b));
+                    self.reduce(k);
+                }
+                Reconfig::Tests(stage, training, mut newton) => {
+                    self.reconfig = Reconfig::Idle;
+                    let built = self.tests.as_mut().and_then(|t| {
+                        let (cfg, space) = (&self.cfg, &self.space);
+                        build_stage(t, stage, &mut newton, space, cfg, &self.scales, &self.chi2)
+                    });
+                    if built.is_none() {
+                        self.tests = None;
+                        if training {
+                            self.phase = ParityPhase::Training;
+                            self.trainer = Trainer::new(
+                                self.cfg.train_samples,
+                                self.cfg.block_len,
+                                self.cfg.ridge,
+                            );
+                        } else {
+                            self.phase = ParityPhase::Lost;
+                        }
+                    } else if stage + 1 < build_stages(N) {
+                        self.reconfig = Reconfig::Tests(stage + 1, training, newton);
                     }
                 }
-                Reconfig::Tests(mut builder) => {
-                    match builder.stage(&self.space, &self.cfg, &self.scales, &self.chi2) {
-                        Build::Busy => self.reconfig = Reconfig::Tests(builder),
-                        Build::Done(t) => {
-                            self.reconfig = Reconfig::Idle;
-                            self.tests = t;
-                            if self.tests.is_none() {
-                                self.phase = ParityPhase::Lost;
-                            }
-                        }
+                Reconfig::Transform(c, part) => {
+                    self.reconfig = Reconfig::Idle;
+                    let dim = self.space.dim();
+                    if let Some(ms) = self.ms.as_mut() {
+                        ms.transform_part(&c, dim, part);
+                    }
+                    if part + 1 < TRANSFORM_PARTS {
+                        self.reconfig = Reconfig::Transform(c, part + 1);
                     }
                 }
             }
@@ -74,5 +109,39 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                 return;
             }
         }
+    }
+
+    /// The space without sensor `k` (already marked removed), and what
+    /// carries into it: the white-noise baseline through the transition
+    /// (its tests rebuilt in the next stages), the multi-scale learning
+    /// (carried in the next stages), or training restarted.
+    fn reduce(&mut self, k: usize) {
+        let Some(sub) = self.reduced_space(k) else {
+            return;
+        };
+        let c = self.space.transition_to(&sub);
+        if let Some(ms) = self.ms.as_mut() {
+            if self.ms_trained {
+                ms.cancel();
+                self.reconfig = Reconfig::Transform(c, 0);
+            } else {
+                // Failed while training: train the reduced set.
+                *ms = Multiscale::new(self.cfg.multiscale, sub.dim(), ms.threshold_set());
+                self.ms_blocks = 0;
+            }
+        }
+        if let Some(t) = self.tests.as_mut() {
+            t.baseline = Baseline {
+                offset: c * t.baseline.offset,
+                leak: c * t.baseline.leak,
+                block_cov: c * t.baseline.block_cov * c.transpose(),
+                correlation_factor: t.baseline.correlation_factor,
+            };
+            self.reconfig = Reconfig::Tests(0, false, Newton::START);
+        } else if self.ms.is_none() {
+            // Failed during training: start training the reduced set.
+            self.trainer = Trainer::new(self.cfg.train_samples, self.cfg.block_len, self.cfg.ridge);
+        }
+        self.space = sub;
     }
 }

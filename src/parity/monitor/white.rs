@@ -5,11 +5,11 @@
 use nalgebra::{SMatrix, SVector, Vector3};
 
 use crate::math::{cholesky, cholesky_solve_right, symmetric_eigen, Real};
-use crate::stats::cusum_threshold;
 
 use super::super::config::{ParityConfig, ParityDetector};
 use super::super::space::ParitySpace;
 use super::super::training::{Baseline, Trainer};
+use super::reconfig::Reconfig;
 use super::{DetectorFlags, ParityMonitor, ParityPhase, ParityReport};
 
 /// Blocks a CUSUM alarm takes at most to clear once the bias is gone
@@ -40,13 +40,12 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         if !self.trainer.done() {
             return;
         }
-        match self
-            .trainer
-            .finish()
-            .and_then(|b| derive_tests(&self.space, b, &self.cfg, &self.scales, &self.chi2))
-        {
-            Some(t) => {
-                self.tests = Some(t);
+        // The tests are built from the next step on, one stage per step
+        // (issue 17); a baseline that gives none trains again.
+        match self.trainer.finish() {
+            Some(b) => {
+                self.tests = Some(Tests::new(b));
+                self.reconfig = Reconfig::Tests(0, true, Newton::START);
                 self.phase = if self.cfg.calibrate_samples > 0 {
                     ParityPhase::Calibrating
                 } else {
@@ -244,14 +243,11 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         for (s, p) in self.scales.iter_mut().zip(self.peaks.iter()) {
             *s = (*p * T::lit(1.25)).max(T::one());
         }
-        let baseline = self.tests.map(|t| t.baseline);
-        self.tests = baseline
-            .and_then(|b| derive_tests(&self.space, b, &self.cfg, &self.scales, &self.chi2));
-        self.phase = if self.tests.is_some() {
-            ParityPhase::Monitoring
-        } else {
-            ParityPhase::Lost
-        };
+        // The tests with the new thresholds, one stage per step from the
+        // next (issue 17).
+        self.tests = self.tests.map(|t| Tests::new(t.baseline));
+        self.reconfig = Reconfig::Tests(0, false, Newton::START);
+        self.phase = ParityPhase::Monitoring;
         self.filled = 0;
         self.head = 0;
         self.cusum_pos = [T::zero(); N];
@@ -259,182 +255,200 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     }
 }
 
-/// Builds every threshold and projection for `space` from `baseline`, all
-/// stages at once (training, calibration; a reconfiguration in flight runs
-/// them one per step, see [`TestsBuilder`]).
-pub(super) fn derive_tests<T: Real, const N: usize>(
+/// Stages of [`build_stage`]: the covariance's factor and the projections,
+/// the PCA basis, then the CUSUM threshold of each sensor in two stages (a
+/// software-`f64` root search each on the M4F).
+pub(super) const fn build_stages(n: usize) -> usize {
+    2 + 2 * n
+}
+
+impl<T: Real, const N: usize> Tests<T, N> {
+    /// Tests of `baseline` not built yet (see [`build_stage`]).
+    pub(super) fn new(baseline: Baseline<T, N>) -> Self {
+        Self {
+            baseline,
+            cov_inv: SMatrix::zeros(),
+            a: SMatrix::zeros(),
+            q: [T::zero(); N],
+            glt_threshold: T::zero(),
+            pca_basis: SMatrix::zeros(),
+            pca_var: [T::zero(); 2],
+            pca_threshold: T::zero(),
+            kappa: [T::zero(); N],
+            cusum_h: [T::zero(); N],
+        }
+    }
+}
+
+/// Runs stage `stage` (of [`build_stages`]`(N)`) of building every
+/// threshold and projection of `space` from `t.baseline` (issue 17:
+/// bounded cost per stage, so the monitor runs one per step). `None`: the baseline gives
+/// no tests.
+pub(super) fn build_stage<T: Real, const N: usize>(
+    t: &mut Tests<T, N>,
+    stage: usize,
+    newton: &mut Newton,
     space: &ParitySpace<T, N>,
-    baseline: Baseline<T, N>,
     cfg: &ParityConfig<T>,
     scales: &[T; 3],
     chi2: &[T; N],
-) -> Option<Tests<T, N>> {
-    let mut b = TestsBuilder::new(baseline);
-    loop {
-        match b.stage(space, cfg, scales, chi2) {
-            Build::Busy => {}
-            Build::Done(t) => return t,
-        }
+) -> Option<()> {
+    match stage {
+        0 => projections(t, space, cfg, scales, chi2),
+        1 => pca(t, space, cfg, scales, chi2),
+        k => cusum(t, (k - 2) / 2, k % 2 == 1, newton, cfg, scales),
     }
 }
 
-/// Progress of a [`TestsBuilder`].
-pub(super) enum Build<T: Real, const N: usize> {
-    /// More stages to run.
-    Busy,
-    /// The tests (`None`: the baseline does not give any).
-    Done(Option<Tests<T, N>>),
+/// `Σ_b⁻¹`, `a_k = Σ_b⁻¹ v_k`, `q_k` and the GLT threshold.
+fn projections<T: Real, const N: usize>(
+    t: &mut Tests<T, N>,
+    space: &ParitySpace<T, N>,
+    cfg: &ParityConfig<T>,
+    scales: &[T; 3],
+    chi2: &[T; N],
+) -> Option<()> {
+    let dim = space.dim();
+    if dim == 0 {
+        return None;
+    }
+    let block_cov = &t.baseline.block_cov;
+    // Pad the unused block with identity so the factorisation is full rank.
+    let padded = SMatrix::<T, N, N>::from_fn(|i, j| {
+        if i < dim && j < dim {
+            at(block_cov, i, j)
+        } else if i == j {
+            T::one()
+        } else {
+            T::zero()
+        }
+    });
+    let l = cholesky(&padded).ok()?;
+    let mut cov_inv = cholesky_solve_right(&l, &SMatrix::<T, N, N>::identity());
+    let mut a = cholesky_solve_right(&l, &space.v().transpose()).transpose();
+    for i in dim..N {
+        cov_inv.row_mut(i).fill(T::zero());
+        cov_inv.column_mut(i).fill(T::zero());
+        a.row_mut(i).fill(T::zero());
+    }
+    t.q = core::array::from_fn(|k| {
+        if space.detectable(k) {
+            space.v().column(k).dot(&a.column(k))
+        } else {
+            T::zero()
+        }
+    });
+    t.cov_inv = cov_inv;
+    t.a = a;
+    t.glt_threshold = *chi2.get(dim)? * cfg.threshold_margin * scales[0];
+    Some(())
 }
 
-/// The tests of a parity space built in stages of bounded cost (issue 17):
-/// the covariance's factor and the projections, the PCA basis, then the
-/// CUSUM threshold of one sensor per stage (a software-`f64` root search
-/// each on the M4F).
+/// The PCA pattern test's basis, variances and threshold.
+fn pca<T: Real, const N: usize>(
+    t: &mut Tests<T, N>,
+    space: &ParitySpace<T, N>,
+    cfg: &ParityConfig<T>,
+    scales: &[T; 3],
+    chi2: &[T; N],
+) -> Option<()> {
+    let dim = space.dim();
+    let block_cov = &t.baseline.block_cov;
+    let (values, vectors) = symmetric_eigen(&SMatrix::<T, N, N>::from_fn(|i, j| {
+        if i < dim && j < dim {
+            at(block_cov, i, j)
+        } else {
+            T::zero()
+        }
+    }))?;
+    let pca_dims = dim.min(2);
+    for c in 0..pca_dims {
+        t.pca_basis.set_column(c, &vectors.column(c));
+        if let Some(v) = t.pca_var.get_mut(c) {
+            *v = values.get(c).copied().unwrap_or(T::zero());
+        }
+    }
+    t.pca_threshold = *chi2.get(pca_dims)? * cfg.threshold_margin * scales[1];
+    Some(())
+}
+
+/// Newton iterations of the CUSUM threshold's root search in the first of
+/// a sensor's two stages (software `f64` `exp` on the M4F: about 3 k
+/// instructions each).
+const NEWTON_SPLIT: u8 = 3;
+/// Iterations at most (those of [`cusum_threshold`](crate::stats::cusum_threshold)).
+const NEWTON_MAX: u8 = 60;
+/// Marks a converged search.
+const NEWTON_DONE: u8 = u8::MAX;
+
+/// The root search of Siegmund's ARL approximation, as
+/// [`cusum_threshold`](crate::stats::cusum_threshold) runs it, resumable: `y` the iterate, `.1` the
+/// iterations done ([`NEWTON_DONE`] once converged).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct TestsBuilder<T: Real, const N: usize> {
-    t: Tests<T, N>,
-    /// Next stage: 0 projections, 1 PCA, `2 + k` sensor k's CUSUM.
-    next: usize,
-}
+pub(super) struct Newton(f64, u8);
 
-impl<T: Real, const N: usize> TestsBuilder<T, N> {
-    pub(super) fn new(baseline: Baseline<T, N>) -> Self {
-        Self {
-            t: Tests {
-                baseline,
-                cov_inv: SMatrix::zeros(),
-                a: SMatrix::zeros(),
-                q: [T::zero(); N],
-                glt_threshold: T::zero(),
-                pca_basis: SMatrix::zeros(),
-                pca_var: [T::zero(); 2],
-                pca_threshold: T::zero(),
-                kappa: [T::zero(); N],
-                cusum_h: [T::zero(); N],
-            },
-            next: 0,
-        }
-    }
+impl Newton {
+    /// Before the first iteration.
+    pub(super) const START: Self = Self(0.0, 0);
 
-    /// Runs the next stage.
-    pub(super) fn stage(
-        &mut self,
-        space: &ParitySpace<T, N>,
-        cfg: &ParityConfig<T>,
-        scales: &[T; 3],
-        chi2: &[T; N],
-    ) -> Build<T, N> {
-        let stage = self.next;
-        self.next += 1;
-        let ok = match stage {
-            0 => self.projections(space, cfg, scales, chi2),
-            1 => self.pca(space, cfg, scales, chi2),
-            _ => {
-                let k = stage - 2;
-                if k >= N {
-                    return Build::Done(Some(self.t));
-                }
-                self.cusum(k, cfg, scales)
-            }
-        };
-        if ok.is_none() {
-            return Build::Done(None);
-        }
-        Build::Busy
-    }
-
-    /// `Σ_b⁻¹`, `a_k = Σ_b⁻¹ v_k`, `q_k` and the GLT threshold.
-    fn projections(
-        &mut self,
-        space: &ParitySpace<T, N>,
-        cfg: &ParityConfig<T>,
-        scales: &[T; 3],
-        chi2: &[T; N],
-    ) -> Option<()> {
-        let dim = space.dim();
-        if dim == 0 {
+    /// Starts the search for `c = 2κ²·ARL₀` (`None`: bad inputs).
+    fn begin(kappa: f64, arl0: f64) -> Option<(Self, f64)> {
+        if kappa.is_nan() || kappa <= 0.0 || arl0.is_nan() || arl0 <= 1.0 {
             return None;
         }
-        let block_cov = &self.t.baseline.block_cov;
-        // Pad the unused block with identity so the factorisation is full rank.
-        let padded = SMatrix::<T, N, N>::from_fn(|i, j| {
-            if i < dim && j < dim {
-                at(block_cov, i, j)
-            } else if i == j {
-                T::one()
-            } else {
-                T::zero()
-            }
-        });
-        let l = cholesky(&padded).ok()?;
-        let mut cov_inv = cholesky_solve_right(&l, &SMatrix::<T, N, N>::identity());
-        let mut a = cholesky_solve_right(&l, &space.v().transpose()).transpose();
-        for i in dim..N {
-            cov_inv.row_mut(i).fill(T::zero());
-            cov_inv.column_mut(i).fill(T::zero());
-            a.row_mut(i).fill(T::zero());
+        let c = 2.0 * kappa * kappa * arl0;
+        if !c.is_finite() {
+            return None;
         }
-        self.t.q = core::array::from_fn(|k| {
-            if space.detectable(k) {
-                space.v().column(k).dot(&a.column(k))
-            } else {
-                T::zero()
-            }
-        });
-        self.t.cov_inv = cov_inv;
-        self.t.a = a;
-        self.t.glt_threshold = *chi2.get(dim)? * cfg.threshold_margin * scales[0];
-        Some(())
+        Some((Self(libm::log1p(c) + 1.0, 0), c))
     }
 
-    /// The PCA pattern test's basis, variances and threshold.
-    fn pca(
-        &mut self,
-        space: &ParitySpace<T, N>,
-        cfg: &ParityConfig<T>,
-        scales: &[T; 3],
-        chi2: &[T; N],
-    ) -> Option<()> {
-        let dim = space.dim();
-        let block_cov = &self.t.baseline.block_cov;
-        let (values, vectors) = symmetric_eigen(&SMatrix::<T, N, N>::from_fn(|i, j| {
-            if i < dim && j < dim {
-                at(block_cov, i, j)
-            } else {
-                T::zero()
-            }
-        }))?;
-        let pca_dims = dim.min(2);
-        for c in 0..pca_dims {
-            self.t.pca_basis.set_column(c, &vectors.column(c));
-            if let Some(v) = self.t.pca_var.get_mut(c) {
-                *v = values.get(c).copied().unwrap_or(T::zero());
+    /// Iterates until `until` iterations are done or it converges.
+    fn run(&mut self, c: f64, until: u8) {
+        while self.1 < until.min(NEWTON_MAX) {
+            let e = libm::exp(self.0);
+            let step = (e - self.0 - 1.0 - c) / (e - 1.0);
+            self.0 -= step;
+            self.1 += 1;
+            if step.abs() <= 1e-12 * self.0 {
+                self.1 = NEWTON_DONE;
             }
         }
-        self.t.pca_threshold = *chi2.get(pca_dims)? * cfg.threshold_margin * scales[1];
-        Some(())
     }
+}
 
-    /// Sensor `k`'s CUSUM reference and threshold.
-    fn cusum(&mut self, k: usize, cfg: &ParityConfig<T>, scales: &[T; 3]) -> Option<()> {
-        let t = &mut self.t;
-        let (Some(&qk), Some(kk), Some(hk)) =
-            (t.q.get(k), t.kappa.get_mut(k), t.cusum_h.get_mut(k))
-        else {
-            return Some(());
-        };
-        if qk <= T::zero() {
-            return Some(());
-        }
-        // A bias b on sensor k shifts the standardised projection by b·√q_k.
-        let shift = (cfg.cusum_bias * qk.sqrt()).to_f64();
-        let kappa_k = 0.5 * shift;
-        *kk = T::lit(kappa_k);
-        *hk = T::lit(cusum_threshold(kappa_k, cfg.cusum_arl0).ok()?)
-            * cfg.threshold_margin
-            * scales[2];
-        Some(())
+/// Sensor `k`'s CUSUM reference and threshold, in two stages (`second`):
+/// the first iterations of the threshold's root search, then the rest —
+/// the same iterations as [`cusum_threshold`](crate::stats::cusum_threshold).
+fn cusum<T: Real, const N: usize>(
+    t: &mut Tests<T, N>,
+    k: usize,
+    second: bool,
+    newton: &mut Newton,
+    cfg: &ParityConfig<T>,
+    scales: &[T; 3],
+) -> Option<()> {
+    let (Some(&qk), Some(kk), Some(hk)) = (t.q.get(k), t.kappa.get_mut(k), t.cusum_h.get_mut(k))
+    else {
+        return Some(());
+    };
+    if qk <= T::zero() {
+        return Some(());
     }
+    // A bias b on sensor k shifts the standardised projection by b·√q_k.
+    let shift = (cfg.cusum_bias * qk.sqrt()).to_f64();
+    let kappa_k = 0.5 * shift;
+    let (start, c) = Newton::begin(kappa_k, cfg.cusum_arl0)?;
+    if !second {
+        *newton = start;
+        newton.run(c, NEWTON_SPLIT);
+        return Some(());
+    }
+    newton.run(c, NEWTON_MAX);
+    let h = (newton.0 / (2.0 * kappa_k) - 1.166).max(0.0);
+    *kk = T::lit(kappa_k);
+    *hk = T::lit(h) * cfg.threshold_margin * scales[2];
+    Some(())
 }
 
 fn at<T: Real, const N: usize>(m: &SMatrix<T, N, N>, i: usize, j: usize) -> T {
@@ -462,4 +476,26 @@ fn isolate<T: Real, const N: usize>(
         }
     }
     (best.0, best.2)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::stats::cusum_threshold;
+
+    #[test]
+    fn the_split_root_search_gives_the_thresholds_of_cusum_threshold() {
+        for kappa in [1e-3, 0.01, 0.05, 0.2, 0.5, 1.0, 3.0] {
+            for arl0 in [10.0, 1e4, 1e9] {
+                let want = cusum_threshold(kappa, arl0).unwrap();
+                let (mut n, c) = Newton::begin(kappa, arl0).unwrap();
+                n.run(c, NEWTON_SPLIT);
+                n.run(c, NEWTON_MAX);
+                let got = (n.0 / (2.0 * kappa) - 1.166).max(0.0);
+                assert_eq!(got.to_bits(), want.to_bits(), "κ {kappa} ARL₀ {arl0}");
+            }
+        }
+        assert!(Newton::begin(0.0, 1e9).is_none());
+        assert!(Newton::begin(0.1, 1.0).is_none());
+    }
 }

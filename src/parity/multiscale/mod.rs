@@ -47,17 +47,17 @@
 
 use nalgebra::{SMatrix, SVector, Vector3};
 
-use crate::math::{cholesky, cholesky_solve_right, Real};
+use crate::math::Real;
 use crate::stats::{student_t_cornish_fisher, student_t_upper_quantile};
 
 mod config;
-mod glr;
+mod lin;
 mod scale;
 mod staged;
 mod training;
 
 pub use config::MultiscaleConfig;
-use glr::{best_two, pad};
+use lin::{backward, best_two, cholesky_dim, forward, pad, quad_form};
 use scale::VibrationScale;
 pub use staged::{BlockStage, Outcome, STAGES};
 
@@ -68,6 +68,9 @@ pub const VIBRATION_REGRESSORS: usize = 9;
 pub const REGRESSORS: usize = 7 + VIBRATION_REGRESSORS;
 /// Number of window lengths tested.
 pub const SCALES: usize = 3;
+/// Parts of [`Multiscale::transform_part`]: the calibration and block
+/// covariance, then two window covariances per part.
+pub const TRANSFORM_PARTS: usize = 1 + SCALES.div_ceil(2);
 
 type Phi<T> = SVector<T, REGRESSORS>;
 /// A window's mean residual, mean regressor and mean gain.
@@ -238,13 +241,33 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// Adds one block to the calibration (training, or in flight while
     /// quiet); `forget` applies the RLS forgetting factor first.
     pub fn learn_calibration(&mut self, p: &SVector<T, N>, phi: &Phi<T>, forget: bool) {
-        if forget {
-            let lambda = T::one() - T::one() / self.cfg.calibration_blocks;
-            self.sxx *= lambda;
-            self.spx *= lambda;
+        // `sxx` is symmetric: only its lower triangle is kept (the factor
+        // reads no more); `spx` rows beyond `dim` are zero (so are `p`'s).
+        let lambda = T::one() - T::one() / self.cfg.calibration_blocks;
+        let dim = self.dim.min(N);
+        let phis = phi.as_slice();
+        for (j, (col, fj)) in self
+            .sxx
+            .as_mut_slice()
+            .chunks_exact_mut(REGRESSORS)
+            .zip(phis.iter())
+            .enumerate()
+        {
+            for (x, fi) in col.iter_mut().zip(phis.iter()).skip(j) {
+                if forget {
+                    *x *= lambda;
+                }
+                *x += *fi * *fj;
+            }
         }
-        self.sxx += phi * phi.transpose();
-        self.spx += p * phi.transpose();
+        for (col, fj) in self.spx.as_mut_slice().chunks_exact_mut(N).zip(phis.iter()) {
+            for (x, pi) in col.iter_mut().zip(p.iter()).take(dim) {
+                if forget {
+                    *x *= lambda;
+                }
+                *x += *pi * *fj;
+            }
+        }
     }
 
     /// The calibration's Cholesky factor of `sxx + ridge`.
@@ -255,7 +278,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                 *d += *r;
             }
         }
-        cholesky(&a).ok()
+        cholesky_dim(&a, REGRESSORS)
     }
 
     /// Prior residual `p̄ − C φ` of a block (before it is learned), with the
@@ -266,8 +289,18 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         p: &SVector<T, N>,
         phi: &Phi<T>,
     ) -> Option<SVector<T, N>> {
-        let c = cholesky_solve_right(l, &self.spx);
-        let r = p - c * phi;
+        // `C φ = spx (sxx + ridge)⁻¹ φ`: one solve for the regressor, not
+        // one per parity row for `C`.
+        let mut w = *phi;
+        forward(l, w.as_mut_slice(), REGRESSORS);
+        backward(l, w.as_mut_slice(), REGRESSORS);
+        let mut r = *p;
+        let dim = self.dim.min(N);
+        for (col, wj) in self.spx.as_slice().chunks_exact(N).zip(w.iter()) {
+            for (ri, c) in r.iter_mut().zip(col.iter()).take(dim) {
+                *ri -= *c * *wj;
+            }
+        }
         r.iter().all(|x| x.finite()).then_some(r)
     }
 
@@ -276,23 +309,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// `l` is the factor of [`calibration_factor`](Self::calibration_factor),
     /// computed once per block by the caller (`None`: no prediction term).
     fn prediction_weight(l: Option<&SMatrix<T, REGRESSORS, REGRESSORS>>, phi: &Phi<T>) -> T {
-        let Some(l) = l else {
-            return T::zero();
-        };
         // ‖L⁻¹ φ‖² by forward substitution.
-        let mut y = *phi;
-        for i in 0..REGRESSORS {
-            let mut s = y.get(i).copied().unwrap_or(T::zero());
-            for k in 0..i {
-                s -= l.get((i, k)).copied().unwrap_or(T::zero())
-                    * y.get(k).copied().unwrap_or(T::zero());
-            }
-            let d = l.get((i, i)).copied().unwrap_or(T::one());
-            if let Some(v) = y.get_mut(i) {
-                *v = s / d;
-            }
-        }
-        y.norm_squared()
+        l.map_or(T::zero(), |l| quad_form(l, phi, REGRESSORS))
     }
 
     /// Pushes a clipped residual, the raw one and its regressor into the
@@ -379,8 +397,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         // The offset is a long mean: its uncertainty is that of the longest
         // window, not of one block (the block covariance would make every
         // offset look insignificant next to the vibration).
-        let l = cholesky(&pad(self.window_cov.last()?, self.dim)).ok()?;
-        let (best, second) = best_two(&l, v, &offset, active);
+        let l = cholesky_dim(self.window_cov.last()?, self.dim)?;
+        let (best, second) = best_two(&l, v, &offset, active, self.dim);
         let (k, score, bias) = best?;
         let margin = score - second;
         (bias.abs() > self.cfg.offset_limit).then_some((k, bias, margin))
@@ -417,21 +435,27 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         self.quiet_blocks = 0;
     }
 
-    /// Carries everything learned into a sub-space: `c` maps this space's
-    /// parity vectors to the sub-space's (`p_new = c p`), `dim` is the new
-    /// dimension.
-    pub fn transform(&mut self, c: &SMatrix<T, N, N>, dim: usize) {
-        // A block in work belongs to the old space.
-        self.cancel();
-        self.dim = dim;
-        self.spx = c * self.spx;
-        self.block_cov = pad(&(c * self.block_cov * c.transpose()), dim);
-        for cov in self.window_cov.iter_mut() {
-            *cov = pad(&(c * *cov * c.transpose()), dim);
+    /// Carries everything learned into a sub-space, part `part` of
+    /// [`TRANSFORM_PARTS`] (one per monitor step, issue 17): `c` maps this
+    /// space's parity vectors to the sub-space's (`p_new = c p`), `dim` is
+    /// the new dimension. The window restarts (its residuals are not
+    /// carried).
+    pub fn transform_part(&mut self, c: &SMatrix<T, N, N>, dim: usize, part: usize) {
+        match part {
+            0 => {
+                // A block in work belongs to the old space.
+                self.cancel();
+                self.clear_window();
+                self.dim = dim;
+                self.spx = c * self.spx;
+                self.block_cov = pad(&(c * self.block_cov * c.transpose()), dim);
+            }
+            _ => {
+                let first = (part - 1) * 2;
+                for cov in self.window_cov.iter_mut().skip(first).take(2) {
+                    *cov = pad(&(c * *cov * c.transpose()), dim);
+                }
+            }
         }
-        for r in self.residuals.iter_mut() {
-            *r = c * *r;
-        }
-        self.clear_window();
     }
 }

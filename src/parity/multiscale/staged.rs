@@ -13,9 +13,10 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use crate::math::{cholesky, Real};
+use crate::math::Real;
 
-use super::glr::{best_two, mahalanobis2, pad};
+use super::lin::{best_two, cholesky_dim, pad, quad_form};
+use super::training::FINISH_PARTS;
 use super::{Multiscale, MultiscaleDecision, Phi, WindowMean, REGRESSORS, SCALES};
 
 /// Most stages one block takes (monitoring: factor, residual, window, three
@@ -43,8 +44,14 @@ pub enum BlockStage {
     Offset,
     /// Training: the block's residual kept for the covariance.
     TrainResidual,
-    /// Training: the end of training (covariances, vibration law).
-    TrainFinish,
+    /// A reconfiguration after an isolation or a failure (the reduced
+    /// space, then the tests rebuilt or the learning carried into it; see
+    /// [`reconfig_steps`](crate::parity::reconfig_steps)); its stage: 0
+    /// the reduced space, then the following ones in order.
+    Reconfigure(u8),
+    /// Training: part of the end of training (vibration law, covariances;
+    /// [`FINISH_PARTS`] of them).
+    TrainFinish(u8),
 }
 
 /// What a finished job gave.
@@ -81,6 +88,10 @@ pub(super) struct Work<T: Real, const N: usize> {
     best_ratio: T,
     isolate: Option<(usize, T)>,
     out: MultiscaleDecision<T>,
+    /// End of training: mean of the standardised residuals and the sum
+    /// of the correlation windows' norms.
+    pub(super) train_mean: SVector<T, N>,
+    pub(super) train_sum: T,
 }
 
 impl<T: Real, const N: usize> Default for Work<T, N> {
@@ -101,6 +112,8 @@ impl<T: Real, const N: usize> Default for Work<T, N> {
             best_ratio: T::zero(),
             isolate: None,
             out: MultiscaleDecision::default(),
+            train_mean: SVector::zeros(),
+            train_sum: T::zero(),
         }
     }
 }
@@ -138,6 +151,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             return Outcome::Busy;
         };
         let next = match stage {
+            // Not a stage of a block (the monitor runs those).
+            BlockStage::Reconfigure(_) => return self.done(Outcome::Busy),
             BlockStage::Factor => match self.calibration_factor() {
                 Some(l) => {
                     self.work.cal = l;
@@ -155,36 +170,37 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                 None => return self.done(Outcome::Decided(None)),
             },
             BlockStage::TrainResidual => {
-                let w = self.work;
-                if let Some(r) = self.residual_with(&w.cal, &w.p, &w.phi) {
-                    self.train_residual(&r, &w.phi, w.level);
+                let (phi, level) = (self.work.phi, self.work.level);
+                if let Some(r) = self.residual_with(&self.work.cal, &self.work.p, &phi) {
+                    self.train_residual(&r, &phi, level);
                 }
                 return self.train_learned();
             }
-            BlockStage::TrainFinish => {
-                let ok = self.finish_training().is_some();
-                return self.done(Outcome::Trained(Some(ok)));
-            }
+            BlockStage::TrainFinish(part) => match self.finish_training_part(usize::from(part)) {
+                Some(false) => BlockStage::TrainFinish(part.saturating_add(1)),
+                Some(true) => return self.done(Outcome::Trained(Some(true))),
+                None => return self.done(Outcome::Trained(Some(false))),
+            },
             BlockStage::Residual => {
-                let w = self.work;
+                let w = &self.work;
                 let Some(raw_r) = self.residual_with(&w.cal, &w.p, &w.phi) else {
                     return self.done(Outcome::Decided(None));
                 };
                 // Standardised by the residual energy this vibration level
                 // predicts (see `scale`): the tests below all run on it.
-                self.work.energy = self.scale.predict(w.level);
+                self.work.energy = self.scale.predict(self.work.level);
                 self.work.raw_r = raw_r;
                 BlockStage::Window
             }
             BlockStage::Window => {
-                let w = self.work;
-                let gain = T::one() / w.energy.sqrt();
-                let r = w.raw_r * gain;
-                let Ok(lb) = cholesky(&self.block_cov) else {
+                let (raw_r, phi, level) = (self.work.raw_r, self.work.phi, self.work.level);
+                let gain = T::one() / self.work.energy.sqrt();
+                let r = raw_r * gain;
+                let Some(lb) = cholesky_dim(&self.block_cov, self.dim) else {
                     return self.done(Outcome::Decided(Some(MultiscaleDecision::default())));
                 };
                 // Huber: bound the block's Mahalanobis norm.
-                let norm2 = mahalanobis2(&lb, &r);
+                let norm2 = quad_form(&lb, &r, self.dim);
                 let norm = norm2.sqrt();
                 let bound = T::lit(self.dim as f64).sqrt() + self.cfg.huber;
                 let clipped = if norm > bound && norm.finite() {
@@ -192,7 +208,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                 } else {
                     r
                 };
-                self.push(&clipped, &w.raw_r, &w.phi, gain, w.level);
+                self.push(&clipped, &raw_r, &phi, gain, level);
                 self.work.means = self.window_means();
                 self.work.norm2 = norm2;
                 self.work.clipped = clipped;
@@ -250,7 +266,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// Runs the job in work to its end (a new block closed before it was
     /// done: blocks shorter than [`STAGES`] samples).
     pub fn finish(&mut self, v: &SMatrix<T, N, N>, active: &[bool; N]) -> Outcome<T> {
-        for _ in 0..STAGES + 1 {
+        for _ in 0..STAGES + FINISH_PARTS {
             match self.advance(v, active) {
                 Outcome::Busy if self.work.stage.is_some() => {}
                 o => return o,
@@ -267,10 +283,10 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// A training block's calibration update; the end of training next
     /// when this was the last block.
     fn train_learned(&mut self) -> Outcome<T> {
-        let w = self.work;
-        self.learn_calibration(&w.p, &w.phi, false);
-        if w.finish {
-            self.work.stage = Some(BlockStage::TrainFinish);
+        let (p, phi) = (self.work.p, self.work.phi);
+        self.learn_calibration(&p, &phi, false);
+        if self.work.finish {
+            self.work.stage = Some(BlockStage::TrainFinish(0));
             return Outcome::Busy;
         }
         self.done(Outcome::Trained(None))
@@ -288,10 +304,11 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         };
         let h = self.early_threshold(*h_steady, *len);
         let total = cov + self.block_cov * Self::prediction_weight(Some(&self.work.cal), &phibar);
-        let Ok(l) = cholesky(&pad(&total, self.dim)) else {
+        // Symmetric as both terms are (`pad` keeps them so).
+        let Some(l) = cholesky_dim(&total, self.dim) else {
             return;
         };
-        let (best, second) = best_two(&l, v, &rbar, active);
+        let (best, second) = best_two(&l, v, &rbar, active, self.dim);
         let Some((k, score, bias)) = best else {
             return;
         };
@@ -323,10 +340,10 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         let (Some(rbar), Some(cov)) = (self.raw_mean(short), self.window_cov.first()) else {
             return;
         };
-        let Ok(l) = cholesky(&pad(cov, self.dim)) else {
+        let Some(l) = cholesky_dim(cov, self.dim) else {
             return;
         };
-        let (best, second) = best_two(&l, v, &rbar, active);
+        let (best, second) = best_two(&l, v, &rbar, active, self.dim);
         let Some((k, score, bias)) = best else {
             return;
         };

@@ -21,13 +21,13 @@ struct ParityRun {
     early_alarm: bool,
     /// Largest instructions of any step, training included.
     max_all: u32,
-    /// Instructions per monitoring step by the block stage it ran
-    /// ([`stage_index`]): count, sum, largest.
+    /// Instructions per step by the block stage it ran ([`stage_index`];
+    /// plain samples: monitoring ones only): count, sum, largest.
     stages: [(u32, u64, u32); STAGE_SLOTS],
 }
 
 /// Slots of [`ParityRun::stages`].
-const STAGE_SLOTS: usize = 12;
+const STAGE_SLOTS: usize = 19;
 /// Names of the slots, in [`stage_index`] order.
 const STAGE_NAMES: [&str; STAGE_SLOTS] = [
     "sample",
@@ -41,7 +41,14 @@ const STAGE_NAMES: [&str; STAGE_SLOTS] = [
     "learn",
     "offset",
     "train-residual",
-    "train-finish",
+    "train-finish0",
+    "train-finish1",
+    "train-finish2",
+    "train-finish3+",
+    "reconfigure: space",
+    "reconfigure: 1 (projections / calibration)",
+    "reconfigure: 2 (PCA / windows)",
+    "reconfigure: 3+ (CUSUM / windows)",
 ];
 
 /// Slot of the stage a step ran (`None`: a plain sample, or one closing a
@@ -57,7 +64,8 @@ fn stage_index(s: Option<BlockStage>) -> usize {
         Some(BlockStage::Learn) => 8,
         Some(BlockStage::Offset) => 9,
         Some(BlockStage::TrainResidual) => 10,
-        Some(BlockStage::TrainFinish) => 11,
+        Some(BlockStage::TrainFinish(i)) => 11 + usize::from(i.min(3)),
+        Some(BlockStage::Reconfigure(i)) => 15 + usize::from(i.min(3)),
     }
 }
 
@@ -102,6 +110,8 @@ fn run<const N: usize, const W: usize>(
             sum += u64::from(c);
             n += 1;
             max = max.max(c);
+        }
+        if rep.phase == ParityPhase::Monitoring || slot != 0 {
             if let Some((k, total, top)) = stages.get_mut(slot) {
                 *k += 1;
                 *total += u64::from(c);
@@ -147,6 +157,7 @@ pub(crate) fn parity_s4_on_target() -> Result<(), &'static str> {
         "  largest step including training: {} instructions",
         r.max_all
     );
+    print_stages(&r);
     if r.early_alarm {
         return Err("alarm before the fault");
     }
