@@ -7,7 +7,7 @@ use nalgebra::{SVector, Vector3};
 use crate::math::Real;
 
 use super::super::multiscale::{BlockStage, Multiscale, Outcome, REGRESSORS};
-use super::{ParityMonitor, ParityReport};
+use super::{reconfig, ParityMonitor, ParityReport};
 
 /// Sums over the block being accumulated for the multi-scale tests.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -63,6 +63,8 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let mean = b.m / n;
         let eb = (b.mm / n - mean.component_mul(&mean)).map(|v| v.max(T::zero()));
         self.ms_block = BlockSums::default();
+        // A reconfiguration still carrying the learning ends first.
+        self.advance_reconfig(true);
         // Blocks shorter than the stages: the work in progress ends now.
         if self.ms.as_ref().is_some_and(|ms| ms.pending().is_some()) {
             if self.multiscale_advance(true, report) {
@@ -183,6 +185,33 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             return false;
         };
         self.vote_to_isolate(k, report)
+    }
+
+    /// Excludes sensor `k` isolated by a block's decision, taken some
+    /// samples into the next block: as if it had been excluded when that
+    /// block began, which is when the one-shot computation decided. The
+    /// reduced space now (so the samples go on into the block), the
+    /// partial block's sums moved into it, the learning carried over the
+    /// next steps; the block before is kept only for its fused mean (it is
+    /// the old space's), as before.
+    pub(super) fn exclude_between_blocks(&mut self, k: usize) {
+        let (prev, block) = (self.ms_prev, self.ms_block);
+        self.exclude(k);
+        self.advance_reconfig(false);
+        if !self.configured() && !matches!(self.reconfig, reconfig::Reconfig::Transform(..)) {
+            return;
+        }
+        self.ms_prev = prev;
+        self.ms_prev2 = None;
+        if let Some(m0) = block.m0 {
+            // Σ m = n m₀ + Σ (m − m₀); the sums are linear in it.
+            let sum_m = m0 * T::lit(f64::from(block.n)) + block.m;
+            self.ms_block = BlockSums {
+                p: self.space.v() * sum_m,
+                x: self.space.lsq() * sum_m,
+                ..block
+            };
+        }
     }
 
     /// The stage of deferred work the next step runs: a reconfiguration

@@ -346,7 +346,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             .zip(usable.iter())
             .all(|(a, u)| !a || *u);
         if all_active_usable
-            && self.configured()
+            && self.accepts_samples()
             && matches!(
                 self.phase,
                 ParityPhase::Training | ParityPhase::Calibrating | ParityPhase::Monitoring
@@ -403,7 +403,11 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         if let Some(h) = self.health.get_mut(k) {
             h.isolate();
         }
-        self.exclude(k);
+        if self.ms.is_some() {
+            self.exclude_between_blocks(k);
+        } else {
+            self.exclude(k);
+        }
         report.isolated = Some(k);
         report.fault = false;
         true

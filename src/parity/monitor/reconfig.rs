@@ -63,6 +63,14 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         u8::try_from(i).unwrap_or(u8::MAX)
     }
 
+    /// Samples go into the tests on this step: no reconfiguration in
+    /// progress, or only the multi-scale learning being carried (the
+    /// samples accumulate in the new space meanwhile; a block closing
+    /// finishes the carrying first).
+    pub(super) fn accepts_samples(&self) -> bool {
+        matches!(self.reconfig, Reconfig::Idle | Reconfig::Transform(..))
+    }
+
     /// Runs one stage of the reconfiguration in progress (`to_end`: all).
     pub(super) fn advance_reconfig(&mut self, to_end: bool) {
         loop {
@@ -78,20 +86,24 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                         let (cfg, space) = (&self.cfg, &self.space);
                         build_stage(t, stage, &mut newton, space, cfg, &self.scales, &self.chi2)
                     });
-                    if built.is_none() {
-                        self.tests = None;
-                        if training {
-                            self.phase = ParityPhase::Training;
-                            self.trainer = Trainer::new(
-                                self.cfg.train_samples,
-                                self.cfg.block_len,
-                                self.cfg.ridge,
-                            );
-                        } else {
-                            self.phase = ParityPhase::Lost;
+                    match built {
+                        None => {
+                            self.tests = None;
+                            if training {
+                                self.phase = ParityPhase::Training;
+                                self.trainer = Trainer::new(
+                                    self.cfg.train_samples,
+                                    self.cfg.block_len,
+                                    self.cfg.ridge,
+                                );
+                            } else {
+                                self.phase = ParityPhase::Lost;
+                            }
                         }
-                    } else if stage + 1 < build_stages(N) {
-                        self.reconfig = Reconfig::Tests(stage + 1, training, newton);
+                        Some(next) if next < build_stages(N) => {
+                            self.reconfig = Reconfig::Tests(next, training, newton);
+                        }
+                        Some(_) => {}
                     }
                 }
                 Reconfig::Transform(c, part) => {

@@ -255,11 +255,12 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     }
 }
 
-/// Stages of [`build_stage`]: the covariance's factor and the projections,
-/// the PCA basis, then the CUSUM threshold of each sensor in two stages (a
-/// software-`f64` root search each on the M4F).
+/// Stages of [`build_stage`] at most: the covariance's factor, the
+/// projections and the PCA basis, then the CUSUM threshold of each sensor
+/// that has one in two stages (a software-`f64` root search each on the
+/// M4F).
 pub(super) const fn build_stages(n: usize) -> usize {
-    2 + 2 * n
+    1 + 2 * n
 }
 
 impl<T: Real, const N: usize> Tests<T, N> {
@@ -292,12 +293,27 @@ pub(super) fn build_stage<T: Real, const N: usize>(
     cfg: &ParityConfig<T>,
     scales: &[T; 3],
     chi2: &[T; N],
-) -> Option<()> {
-    match stage {
-        0 => projections(t, space, cfg, scales, chi2),
-        1 => pca(t, space, cfg, scales, chi2),
-        k => cusum(t, (k - 2) / 2, k % 2 == 1, newton, cfg, scales),
+) -> Option<usize> {
+    if stage == 0 {
+        projections(t, space, cfg, scales, chi2)?;
+        pca(t, space, cfg, scales, chi2)?;
+        return Some(next_cusum(t, 0));
     }
+    let (k, second) = ((stage - 1) / 2, (stage - 1) % 2 == 1);
+    cusum(t, k, second, newton, cfg, scales)?;
+    Some(if second {
+        next_cusum(t, k + 1)
+    } else {
+        stage + 1
+    })
+}
+
+/// First stage of the CUSUM of the first sensor from `from` on that has
+/// one (`q_k > 0`), or [`build_stages`]`(N)` when none is left.
+fn next_cusum<T: Real, const N: usize>(t: &Tests<T, N>, from: usize) -> usize {
+    (from..N)
+        .find(|k| t.q.get(*k).is_some_and(|q| *q > T::zero()))
+        .map_or(build_stages(N), |k| 1 + 2 * k)
 }
 
 /// `Σ_b⁻¹`, `a_k = Σ_b⁻¹ v_k`, `q_k` and the GLT threshold.
