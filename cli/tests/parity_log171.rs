@@ -129,13 +129,16 @@ fn injected_gyro_steps_are_isolated_at_the_measured_rates() {
     // 1 °/s, measured: z 151/174, y 125/174, x 9/174 (IMU0's x gyro reads
     // 12 °/s of aliased vibration per sample: with it, a step on IMU1 or
     // IMU2 x cannot be told from the opposite step on the other one within
-    // 10 s at the isolation margin); 6 cases with a false alarm.
+    // 10 s at the isolation margin); 9 cases with a false alarm (6 before
+    // a block's decision was spread over the next block's samples, issue
+    // 17: three cases that were not isolated anyway now also count an
+    // alarm outside the step, its decision 9 samples later).
     let (z, n) = passes(&cases, axis(2));
     assert!(z >= 149 && n == 174, "{z}/{n}");
     let (y, _) = passes(&cases, axis(1));
     assert!(y >= 123, "{y}");
     let fa = cases.iter().filter(|c| c.false_alarm).count();
-    assert!(fa <= 6, "{fa}");
+    assert!(fa <= 9, "{fa}");
     // Every IMU is covered: z steps on each IMU isolated in ≥ 45 of 58 cases.
     for imu in 0..3 {
         let (ok, _) = passes(&cases, |c| {
@@ -164,14 +167,16 @@ fn injected_accelerometer_steps_are_isolated_at_the_measured_rates() {
     )
     .unwrap();
     // 0.3 m/s², measured: x 142/174, y 157/174, z 92/174 (the a_z
-    // vibration events above), 4 cases with a false alarm.
+    // vibration events above), 6 cases with a false alarm (4 before the
+    // decisions' 9-sample latency of issue 17; two cases not isolated
+    // either way).
     let axis = |a: usize| move |c: &StepCase| c.injection.channel == a;
     let (x, _) = passes(&cases, axis(0));
     let (y, _) = passes(&cases, axis(1));
     let (z, _) = passes(&cases, axis(2));
     assert!(x >= 140 && y >= 155 && z >= 90, "{x} {y} {z}");
     let fa = cases.iter().filter(|c| c.false_alarm).count();
-    assert!(fa <= 4, "{fa}");
+    assert!(fa <= 6, "{fa}");
     for imu in 0..3 {
         let (ok, _) = passes(&cases, |c| {
             c.injection.imu == imu && c.injection.channel < 2

@@ -2,9 +2,9 @@
 //! the reduced parity space, then either the white-noise tests rebuilt
 //! ([`build_stage`]) or the multi-scale tests' learning carried into the
 //! new space, one stage per step, instead of all in the step that isolated.
-//! The white-noise tests' construction at the end of training and of
-//! calibration runs the same way (≈ 168 k instructions in one step
-//! before). The tests are idle meanwhile (their window and
+//! (The white-noise tests' construction at the end of training and of
+//! calibration still runs in one step, ≈ 168 k instructions on the M4F:
+//! the lead-in's calibration and monitoring start on the next sample.) The tests are idle meanwhile (their window and
 //! CUSUMs restart after a reconfiguration anyway) and fusion goes on; what
 //! the stages build is what the one-shot reconfiguration built, in use at
 //! most [`reconfig_steps`] steps later.
@@ -37,10 +37,8 @@ pub(super) enum Reconfig<T: Real, const N: usize> {
     /// The space without sensor `k` next.
     Space(usize),
     /// White-noise tests: build stage `.0` next (the tests in progress are
-    /// in `tests`); `.1`: at the end of training (a baseline that gives no
-    /// tests trains again instead of losing the monitor); `.2` the CUSUM
-    /// threshold's root search in progress.
-    Tests(usize, bool, Newton),
+    /// in `tests`); `.1` the CUSUM threshold's root search in progress.
+    Tests(usize, Newton),
     /// Multi-scale tests: part `.1` of carrying the learning through the
     /// transition `.0` (`p_new = c p`).
     Transform(SMatrix<T, N, N>, usize),
@@ -57,7 +55,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     pub(super) fn reconfig_stage(&self) -> u8 {
         let i = match self.reconfig {
             Reconfig::Idle | Reconfig::Space(_) => 0,
-            Reconfig::Tests(stage, _, _) => 1 + stage,
+            Reconfig::Tests(stage, _) => 1 + stage,
             Reconfig::Transform(_, part) => 1 + part,
         };
         u8::try_from(i).unwrap_or(u8::MAX)
@@ -80,7 +78,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                     self.reconfig = Reconfig::Idle;
                     self.reduce(k);
                 }
-                Reconfig::Tests(stage, training, mut newton) => {
+                Reconfig::Tests(stage, mut newton) => {
                     self.reconfig = Reconfig::Idle;
                     let built = self.tests.as_mut().and_then(|t| {
                         let (cfg, space) = (&self.cfg, &self.space);
@@ -89,19 +87,10 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                     match built {
                         None => {
                             self.tests = None;
-                            if training {
-                                self.phase = ParityPhase::Training;
-                                self.trainer = Trainer::new(
-                                    self.cfg.train_samples,
-                                    self.cfg.block_len,
-                                    self.cfg.ridge,
-                                );
-                            } else {
-                                self.phase = ParityPhase::Lost;
-                            }
+                            self.phase = ParityPhase::Lost;
                         }
                         Some(next) if next < build_stages(N) => {
-                            self.reconfig = Reconfig::Tests(next, training, newton);
+                            self.reconfig = Reconfig::Tests(next, newton);
                         }
                         Some(_) => {}
                     }
@@ -149,7 +138,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                 block_cov: c * t.baseline.block_cov * c.transpose(),
                 correlation_factor: t.baseline.correlation_factor,
             };
-            self.reconfig = Reconfig::Tests(0, false, Newton::START);
+            self.reconfig = Reconfig::Tests(0, Newton::START);
         } else if self.ms.is_none() {
             // Failed during training: start training the reduced set.
             self.trainer = Trainer::new(self.cfg.train_samples, self.cfg.block_len, self.cfg.ridge);

@@ -9,7 +9,6 @@ use crate::math::{cholesky, cholesky_solve_right, symmetric_eigen, Real};
 use super::super::config::{ParityConfig, ParityDetector};
 use super::super::space::ParitySpace;
 use super::super::training::{Baseline, Trainer};
-use super::reconfig::Reconfig;
 use super::{DetectorFlags, ParityMonitor, ParityPhase, ParityReport};
 
 /// Blocks a CUSUM alarm takes at most to clear once the bias is gone
@@ -40,12 +39,15 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         if !self.trainer.done() {
             return;
         }
-        // The tests are built from the next step on, one stage per step
-        // (issue 17); a baseline that gives none trains again.
-        match self.trainer.finish() {
-            Some(b) => {
-                self.tests = Some(Tests::new(b));
-                self.reconfig = Reconfig::Tests(0, true, Newton::START);
+        // All at once (the lead-in's calibration starts on the next sample;
+        // only a reconfiguration in flight is built one stage per step).
+        match self
+            .trainer
+            .finish()
+            .and_then(|b| derive_tests(&self.space, b, &self.cfg, &self.scales, &self.chi2))
+        {
+            Some(t) => {
+                self.tests = Some(t);
                 self.phase = if self.cfg.calibrate_samples > 0 {
                     ParityPhase::Calibrating
                 } else {
@@ -243,16 +245,37 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         for (s, p) in self.scales.iter_mut().zip(self.peaks.iter()) {
             *s = (*p * T::lit(1.25)).max(T::one());
         }
-        // The tests with the new thresholds, one stage per step from the
-        // next (issue 17).
-        self.tests = self.tests.map(|t| Tests::new(t.baseline));
-        self.reconfig = Reconfig::Tests(0, false, Newton::START);
-        self.phase = ParityPhase::Monitoring;
+        let baseline = self.tests.map(|t| t.baseline);
+        self.tests = baseline
+            .and_then(|b| derive_tests(&self.space, b, &self.cfg, &self.scales, &self.chi2));
+        self.phase = if self.tests.is_some() {
+            ParityPhase::Monitoring
+        } else {
+            ParityPhase::Lost
+        };
         self.filled = 0;
         self.head = 0;
         self.cusum_pos = [T::zero(); N];
         self.cusum_neg = [T::zero(); N];
     }
+}
+
+/// Builds every threshold and projection for `space` from `baseline`, all
+/// stages at once (end of training and of calibration).
+pub(super) fn derive_tests<T: Real, const N: usize>(
+    space: &ParitySpace<T, N>,
+    baseline: Baseline<T, N>,
+    cfg: &ParityConfig<T>,
+    scales: &[T; 3],
+    chi2: &[T; N],
+) -> Option<Tests<T, N>> {
+    let mut t = Tests::new(baseline);
+    let mut newton = Newton::START;
+    let mut stage = 0;
+    while stage < build_stages(N) {
+        stage = build_stage(&mut t, stage, &mut newton, space, cfg, scales, chi2)?;
+    }
+    Some(t)
 }
 
 /// Stages of [`build_stage`] at most: the covariance's factor, the
