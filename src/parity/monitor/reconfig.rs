@@ -40,7 +40,8 @@ pub(super) enum Reconfig<T: Real, const N: usize> {
     /// in `tests`); `.1` the CUSUM threshold's root search in progress.
     Tests(usize, Newton),
     /// Multi-scale tests: part `.1` of carrying the learning through the
-    /// transition `.0` (`p_new = c p`).
+    /// transition `.0` (`p_new = c p`; in part 0 still the old space's `V`,
+    /// from which the transition is formed).
     Transform(SMatrix<T, N, N>, usize),
 }
 
@@ -95,8 +96,16 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                         Some(_) => {}
                     }
                 }
-                Reconfig::Transform(c, part) => {
+                Reconfig::Transform(m, part) => {
                     self.reconfig = Reconfig::Idle;
+                    // Part 0 holds the old space's `V`: the transition
+                    // `c = V_new V_oldᵀ` is formed here, not in the
+                    // (isolating) step that built the new space.
+                    let c = if part == 0 {
+                        self.space.v() * m.transpose()
+                    } else {
+                        m
+                    };
                     let dim = self.space.dim();
                     if let Some(ms) = self.ms.as_mut() {
                         ms.transform_part(&c, dim, part);
@@ -120,11 +129,10 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let Some(sub) = self.reduced_space(k) else {
             return;
         };
-        let c = self.space.transition_to(&sub);
         if let Some(ms) = self.ms.as_mut() {
             if self.ms_trained {
                 ms.cancel();
-                self.reconfig = Reconfig::Transform(c, 0);
+                self.reconfig = Reconfig::Transform(*self.space.v(), 0);
             } else {
                 // Failed while training: train the reduced set.
                 *ms = Multiscale::new(self.cfg.multiscale, sub.dim(), ms.threshold_set());
@@ -132,6 +140,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             }
         }
         if let Some(t) = self.tests.as_mut() {
+            let c = self.space.transition_to(&sub);
             t.baseline = Baseline {
                 offset: c * t.baseline.offset,
                 leak: c * t.baseline.leak,
