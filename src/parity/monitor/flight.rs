@@ -66,11 +66,11 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         // A reconfiguration still carrying the learning ends first.
         self.advance_reconfig(true);
         // Blocks shorter than the stages: the work in progress ends now.
-        if self.ms.as_ref().is_some_and(|ms| ms.pending().is_some()) {
-            if self.multiscale_advance(true, report) {
-                // It reconfigured: this block is from the old space.
-                return;
-            }
+        if self.ms.as_ref().is_some_and(|ms| ms.pending().is_some())
+            && self.multiscale_advance(true, report)
+        {
+            // It reconfigured: this block is from the old space.
+            return;
         }
         if let (Some((p_prev, x_prev, e_prev)), Some(x_before)) = (self.ms_prev, self.ms_prev2) {
             let dx = (xb - x_before) * T::lit(0.5);
