@@ -50,7 +50,7 @@ pub enum BlockStage {
     /// the reduced space, then the following ones in order.
     Reconfigure(u8),
     /// Training: part of the end of training (vibration law, covariances;
-    /// [`FINISH_PARTS`] of them).
+    /// 14 of them).
     TrainFinish(u8),
 }
 
