@@ -46,9 +46,9 @@ const STAGE_NAMES: [&str; STAGE_SLOTS] = [
     "train-finish2",
     "train-finish3+",
     "reconfigure: space",
-    "reconfigure: 1 (projections / calibration)",
-    "reconfigure: 2 (PCA / windows)",
-    "reconfigure: 3+ (CUSUM / windows)",
+    "reconfigure: 1 (white: projections + PCA; multi-scale: calibration)",
+    "reconfigure: 2 (white: a CUSUM half; multi-scale: windows)",
+    "reconfigure: 3+ (white: CUSUM halves; multi-scale: windows)",
 ];
 
 /// Slot of the stage a step ran (`None`: a plain sample, or one closing a
