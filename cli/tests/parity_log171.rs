@@ -126,13 +126,15 @@ fn injected_gyro_steps_are_isolated_at_the_measured_rates() {
     )
     .unwrap();
     let axis = |a: usize| move |c: &StepCase| c.injection.channel == 3 + a;
-    // 1 °/s, measured: z 151/174, y 125/174, x 9/174 (IMU0's x gyro reads
+    // 1 °/s, measured: z 150/174, y 124/174, x 8/174 (IMU0's x gyro reads
     // 12 °/s of aliased vibration per sample: with it, a step on IMU1 or
     // IMU2 x cannot be told from the opposite step on the other one within
-    // 10 s at the isolation margin); 8 cases with a false alarm — 6 of
+    // 10 s at the isolation margin); 8 cases with a false alarm — most of
     // them alarms or isolations that the step's own blocks raise within
     // 0.5 s after it ends, when the alarm's confirmation (three decisions
-    // above threshold) came only then.
+    // above threshold) came only then. (Before the confirmation and the
+    // decision spread over the next block's samples, issue 17: 285 passed,
+    // 6 false-alarm cases.)
     let (z, n) = passes(&cases, axis(2));
     assert!(z >= 149 && n == 174, "{z}/{n}");
     let (y, _) = passes(&cases, axis(1));
@@ -166,16 +168,17 @@ fn injected_accelerometer_steps_are_isolated_at_the_measured_rates() {
         CRASH,
     )
     .unwrap();
-    // 0.3 m/s², measured: x 142/174, y 157/174, z 92/174 (the a_z
-    // vibration events above), 5 cases with a false alarm (3 of them
-    // alarms the step's own blocks raise right after it ends).
+    // 0.3 m/s², measured: x 141/174, y 158/174, z 91/174 (the a_z
+    // vibration events above), 6 cases with a false alarm (most of them
+    // alarms the step's own blocks raise right after it ends; 4 before the
+    // alarm confirmation and the decisions' 9-sample latency of issue 17).
     let axis = |a: usize| move |c: &StepCase| c.injection.channel == a;
     let (x, _) = passes(&cases, axis(0));
     let (y, _) = passes(&cases, axis(1));
     let (z, _) = passes(&cases, axis(2));
     assert!(x >= 140 && y >= 155 && z >= 90, "{x} {y} {z}");
     let fa = cases.iter().filter(|c| c.false_alarm).count();
-    assert!(fa <= 5, "{fa}");
+    assert!(fa <= 6, "{fa}");
     for imu in 0..3 {
         let (ok, _) = passes(&cases, |c| {
             c.injection.imu == imu && c.injection.channel < 2

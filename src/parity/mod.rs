@@ -29,8 +29,10 @@ mod validate;
 pub use config::{ParityConfig, ParityDetector};
 pub use geometry::{euler_rotation, yaw_rotation, Geometry};
 pub use health::{HealthConfig, Reading, SensorHealth, SensorStatus};
-pub use monitor::{DetectorFlags, ParityMonitor, ParityPhase, ParityReport};
-pub use multiscale::{MultiscaleConfig, MultiscaleDecision, REGRESSORS, SCALES};
+pub use monitor::{reconfig_steps, DetectorFlags, ParityMonitor, ParityPhase, ParityReport};
+pub use multiscale::{
+    BlockStage, MultiscaleConfig, MultiscaleDecision, REGRESSORS, SCALES, STAGES,
+};
 pub use space::ParitySpace;
 pub use training::{Baseline, Trainer};
 

@@ -6,8 +6,8 @@ use nalgebra::{SVector, Vector3};
 
 use crate::math::Real;
 
-use super::super::multiscale::{Multiscale, MultiscaleDecision, REGRESSORS};
-use super::{ParityMonitor, ParityReport};
+use super::super::multiscale::{BlockStage, Multiscale, Outcome, REGRESSORS};
+use super::{reconfig, ParityMonitor, ParityReport};
 
 /// Sums over the block being accumulated for the multi-scale tests.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -36,7 +36,8 @@ impl<T: Real, const N: usize> Default for BlockSums<T, N> {
 
 impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// Accumulates one sample into the multi-scale block; a complete block
-    /// processes the one before it (whose centred difference is now known).
+    /// starts the work on the one before it (whose centred difference is
+    /// now known).
     pub(super) fn multiscale_sample(
         &mut self,
         m: &SVector<T, N>,
@@ -62,29 +63,34 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let mean = b.m / n;
         let eb = (b.mm / n - mean.component_mul(&mean)).map(|v| v.max(T::zero()));
         self.ms_block = BlockSums::default();
+        // A reconfiguration still carrying the learning ends first.
+        self.advance_reconfig(true);
+        // Blocks shorter than the stages: the work in progress ends now.
+        if self.ms.as_ref().is_some_and(|ms| ms.pending().is_some())
+            && self.multiscale_advance(true, report)
+        {
+            // It reconfigured: this block is from the old space.
+            return;
+        }
         if let (Some((p_prev, x_prev, e_prev)), Some(x_before)) = (self.ms_prev, self.ms_prev2) {
             let dx = (xb - x_before) * T::lit(0.5);
-            self.multiscale_block(&p_prev, &x_prev, &dx, &e_prev, report);
+            self.multiscale_block(&p_prev, &x_prev, &dx, &e_prev);
         }
         self.ms_prev2 = self.ms_prev.map(|(_, x, _)| x);
         self.ms_prev = Some((pb, xb, eb));
     }
 
-    /// One block through the multi-scale tests: training (first two thirds
-    /// calibrate, the last third measures the residual's covariance), then
-    /// a decision per block, with isolation after `isolate_after` agreeing
-    /// decisions whose hypothesis beats the runner-up by the margin.
+    /// Starts one block through the multi-scale tests: training (first two
+    /// thirds calibrate, at once; the last third measures the residual's
+    /// covariance), or a decision, in stages.
     fn multiscale_block(
         &mut self,
         p: &SVector<T, N>,
         x: &Vector3<T>,
         dx: &Vector3<T>,
         e: &SVector<T, N>,
-        report: &mut ParityReport<T, N>,
     ) {
         let train_blocks = (self.cfg.train_samples / u32::from(self.cfg.block_len.max(1))).max(12);
-        let cfg = self.cfg.multiscale;
-        let v = *self.space.v();
         let active = *self.space.active();
         let Some(ms) = self.ms.as_mut() else {
             return;
@@ -101,46 +107,58 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         // The block's vibration level: the RMS spread of the sensors within
         // it (what the residual's variance follows, see `multiscale::scale`).
         let level = e.sum().max(T::zero()).sqrt();
-        if !self.ms_trained {
-            self.ms_blocks = self.ms_blocks.saturating_add(1);
-            if self.ms_blocks <= train_blocks * 2 / 3 {
-                ms.learn_calibration(p, &phi, false);
-                return;
-            }
-            if let Some(r) = ms.residual(p, &phi) {
-                ms.train_residual(&r, &phi, level);
-            }
+        if self.ms_trained {
+            ms.begin(p, &phi, level, None);
+            return;
+        }
+        self.ms_blocks = self.ms_blocks.saturating_add(1);
+        if self.ms_blocks <= train_blocks * 2 / 3 {
             ms.learn_calibration(p, &phi, false);
-            if self.ms_blocks >= train_blocks {
-                if ms.finish_training(train_blocks).is_some() {
-                    self.ms_trained = true;
-                } else {
-                    // Degenerate training data: start again.
-                    *ms = Multiscale::new(cfg, self.space.dim(), ms.threshold_set());
-                    self.ms_blocks = 0;
-                }
-            }
             return;
         }
-        let Some(mut d) = ms.decide(p, &phi, level, &v, &active) else {
-            return;
+        ms.begin(p, &phi, level, Some(self.ms_blocks >= train_blocks));
+    }
+
+    /// Runs one stage of the block in work (`to_end`: all of them) and
+    /// applies its outcome: the end of training, or the block's decision,
+    /// with isolation after `isolate_after` agreeing decisions whose
+    /// hypothesis beats the runner-up by the margin. True when it isolated
+    /// a sensor (the set changed).
+    pub(super) fn multiscale_advance(
+        &mut self,
+        to_end: bool,
+        report: &mut ParityReport<T, N>,
+    ) -> bool {
+        if !self.configured() {
+            return false;
+        }
+        let cfg = self.cfg.multiscale;
+        let Some(ms) = self.ms.as_mut() else {
+            return false;
         };
-        // A relative bias the calibration holds beyond the offset limit is
-        // a fault present since power-up (or since training).
-        if d.ratio <= T::one() {
-            if let Some((k, bias, margin)) = ms.offset_fault(&v, &active) {
-                d = MultiscaleDecision {
-                    ratio: T::one() + T::lit(1e-3),
-                    scale: 0,
-                    suspect: Some(k),
-                    bias,
-                    margin,
-                    isolate: Some((k, margin)),
-                    learning: false,
-                    gross: false,
-                };
-            }
+        if ms.pending().is_none() {
+            return false;
         }
+        let (v, active) = (self.space.v(), self.space.active());
+        let outcome = if to_end {
+            ms.finish(v, active)
+        } else {
+            ms.advance(v, active)
+        };
+        let d = match outcome {
+            Outcome::Busy | Outcome::Trained(None) | Outcome::Decided(None) => return false,
+            Outcome::Trained(Some(true)) => {
+                self.ms_trained = true;
+                return false;
+            }
+            Outcome::Trained(Some(false)) => {
+                // Degenerate training data: start again.
+                *ms = Multiscale::new(cfg, self.space.dim(), ms.threshold_set());
+                self.ms_blocks = 0;
+                return false;
+            }
+            Outcome::Decided(Some(d)) => d,
+        };
         report.decision = true;
         report.multiscale = d;
         // The alarm is confirmed by `isolate_after` consecutive decisions
@@ -180,12 +198,51 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             if !above {
                 self.suspect_run = (None, 0);
             }
-            return;
+            return false;
         };
         // Confirmation and isolation need the same run of decisions: the
         // period that isolates is then the alarm's first, and reports it.
-        if self.vote_to_isolate(k, report) {
+        let isolated = self.vote_to_isolate(k, report);
+        if isolated {
             report.fault = true;
         }
+        isolated
+    }
+
+    /// Excludes sensor `k` isolated by a block's decision, taken some
+    /// samples into the next block: as if it had been excluded when that
+    /// block began, which is when the one-shot computation decided. The
+    /// reduced space now (so the samples go on into the block), the
+    /// partial block's sums moved into it, the learning carried over the
+    /// next steps; the block before is kept only for its fused mean (it is
+    /// the old space's), as before.
+    pub(super) fn exclude_between_blocks(&mut self, k: usize) {
+        let (prev, block) = (self.ms_prev, self.ms_block);
+        self.exclude(k);
+        self.advance_reconfig(false);
+        if !self.configured() && !matches!(self.reconfig, reconfig::Reconfig::Transform(..)) {
+            return;
+        }
+        self.ms_prev = prev;
+        self.ms_prev2 = None;
+        if let Some(m0) = block.m0 {
+            // Σ m = n m₀ + Σ (m − m₀); the sums are linear in it.
+            let sum_m = m0 * T::lit(f64::from(block.n)) + block.m;
+            self.ms_block = BlockSums {
+                p: self.space.v() * sum_m,
+                x: self.space.lsq() * sum_m,
+                ..block
+            };
+        }
+    }
+
+    /// The stage of deferred work the next step runs: a reconfiguration
+    /// after an isolation or a failure (both detectors), or the multi-scale
+    /// block in work; `None` when there is none.
+    pub fn pending_stage(&self) -> Option<BlockStage> {
+        if !self.configured() {
+            return Some(BlockStage::Reconfigure(self.reconfig_stage()));
+        }
+        self.ms.as_ref().and_then(|ms| ms.pending())
     }
 }

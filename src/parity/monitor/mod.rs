@@ -13,12 +13,15 @@ use super::multiscale::{Multiscale, MultiscaleDecision};
 use super::space::invert_rank3;
 use super::training::{Baseline, Trainer};
 use super::{ConfigError, Geometry, ParitySpace};
+pub use reconfig::reconfig_steps;
 
 mod flight;
+mod reconfig;
 mod white;
 
 use flight::BlockSums;
-use white::{derive_tests, Tests};
+use reconfig::Reconfig;
+use white::Tests;
 
 /// Monitor phase.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -142,6 +145,8 @@ pub struct ParityMonitor<T: Real, const N: usize, const W: usize> {
     /// Consecutive decisions above threshold (the alarm's confirmation).
     ms_above: u16,
     ms_trained: bool,
+    /// White-noise tests being rebuilt after an isolation.
+    reconfig: Reconfig<T, N>,
 }
 
 impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
@@ -223,6 +228,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             ms_prev2: None,
             ms_blocks: 0,
             ms_trained: false,
+            reconfig: Reconfig::Idle,
         }
         .with_multiscale()
     }
@@ -334,6 +340,12 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             }
         }
         report.fused = fuse_subset(self.space.geometry(), &m, &usable);
+        // One stage of a reconfiguration in progress, or else of the
+        // multi-scale block in work (issue 17: a block's work spread over
+        // the next block's samples, which may isolate and reconfigure): both
+        // before this sample is projected.
+        self.advance_reconfig(false);
+        self.multiscale_advance(false, &mut report);
         let all_active_usable = self
             .space
             .active()
@@ -341,6 +353,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             .zip(usable.iter())
             .all(|(a, u)| !a || *u);
         if all_active_usable
+            && self.accepts_samples()
             && matches!(
                 self.phase,
                 ParityPhase::Training | ParityPhase::Calibrating | ParityPhase::Monitoring
@@ -383,7 +396,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         } else {
             self.space.dim()
         };
-        if let Some(t) = &self.tests {
+        if let Some(t) = self.tests.as_ref().filter(|_| self.configured()) {
             report.glt_threshold = t.glt_threshold;
             report.pca_threshold = t.pca_threshold;
         }
@@ -411,7 +424,11 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         if let Some(h) = self.health.get_mut(k) {
             h.isolate();
         }
-        self.exclude(k);
+        if self.ms.is_some() {
+            self.exclude_between_blocks(k);
+        } else {
+            self.exclude(k);
+        }
         report.isolated = Some(k);
         report.fault = false;
         true
@@ -420,12 +437,13 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// Removes sensor `k` from the set and carries the learned baseline
     /// into the reduced parity space.
     fn exclude(&mut self, k: usize) {
+        // A reconfiguration still in progress ends first (a second
+        // failure within its few steps).
+        self.advance_reconfig(true);
         match self.removed.get_mut(k) {
             Some(r) if !*r => *r = true,
             _ => return,
         }
-        let active: [bool; N] =
-            core::array::from_fn(|i| !self.removed.get(i).copied().unwrap_or(true));
         self.block = SVector::zeros();
         self.block_n = 0;
         self.filled = 0;
@@ -439,50 +457,35 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         self.ms_prev2 = None;
         self.ms_hold = 0;
         self.ms_above = 0;
-        match self.space.without(k) {
-            Ok(sub) => {
-                let c = self.space.transition_to(&sub);
-                if let Some(ms) = self.ms.as_mut() {
-                    if self.ms_trained {
-                        ms.transform(&c, sub.dim());
-                    } else {
-                        // Failed while training: train the reduced set.
-                        *ms = Multiscale::new(self.cfg.multiscale, sub.dim(), ms.threshold_set());
-                        self.ms_blocks = 0;
-                    }
-                }
-                if let Some(t) = self.tests {
-                    let b = Baseline {
-                        offset: c * t.baseline.offset,
-                        leak: c * t.baseline.leak,
-                        block_cov: c * t.baseline.block_cov * c.transpose(),
-                        correlation_factor: t.baseline.correlation_factor,
-                    };
-                    self.tests = derive_tests(&sub, b, &self.cfg, &self.scales, &self.chi2);
-                    if self.tests.is_none() {
-                        self.phase = ParityPhase::Lost;
-                    }
-                } else {
-                    // Failed during training: start training the reduced set.
-                    self.trainer =
-                        Trainer::new(self.cfg.train_samples, self.cfg.block_len, self.cfg.ridge);
-                }
-                self.space = sub;
-            }
-            Err(_) => {
-                let usable = active.iter().filter(|a| **a).count();
-                let rank_ok = usable >= 3
-                    && fuse_subset(self.space.geometry(), &SVector::zeros(), &active).is_some();
-                self.phase = if rank_ok {
-                    ParityPhase::NoRedundancy
-                } else {
-                    ParityPhase::Lost
-                };
-                // No parity space is left; fusion uses the health masks.
-                self.tests = None;
-                self.ms = None;
-            }
+        if let Some(ms) = self.ms.as_mut() {
+            // The block in work belongs to the old space.
+            ms.cancel();
         }
+        // The reduced space and what carries into it: from the next step,
+        // in stages.
+        self.reconfig = Reconfig::Space(k);
+    }
+
+    /// The parity space without sensor `k` (already marked removed); `None`
+    /// when none is left: then fusing without monitoring, or lost.
+    fn reduced_space(&mut self, k: usize) -> Option<ParitySpace<T, N>> {
+        if let Ok(sub) = self.space.without(k) {
+            return Some(sub);
+        }
+        let active: [bool; N] =
+            core::array::from_fn(|i| !self.removed.get(i).copied().unwrap_or(true));
+        let usable = active.iter().filter(|a| **a).count();
+        let rank_ok =
+            usable >= 3 && fuse_subset(self.space.geometry(), &SVector::zeros(), &active).is_some();
+        self.phase = if rank_ok {
+            ParityPhase::NoRedundancy
+        } else {
+            ParityPhase::Lost
+        };
+        // No parity space is left; fusion uses the health masks.
+        self.tests = None;
+        self.ms = None;
+        None
     }
 }
 

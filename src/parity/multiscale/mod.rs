@@ -47,17 +47,19 @@
 
 use nalgebra::{SMatrix, SVector, Vector3};
 
-use crate::math::{cholesky, cholesky_solve_right, Real};
+use crate::math::Real;
 use crate::stats::{student_t_cornish_fisher, student_t_upper_quantile};
 
 mod config;
-mod glr;
+mod lin;
 mod scale;
+mod staged;
 mod training;
 
 pub use config::MultiscaleConfig;
-use glr::{best_two, mahalanobis2, pad};
+use lin::{backward, best_two, cholesky_dim, forward, pad, quad_form};
 use scale::VibrationScale;
+pub use staged::{BlockStage, Outcome, STAGES};
 
 /// Sensors whose own vibration energy is a regressor (the first nine).
 pub const VIBRATION_REGRESSORS: usize = 9;
@@ -66,6 +68,9 @@ pub const VIBRATION_REGRESSORS: usize = 9;
 pub const REGRESSORS: usize = 7 + VIBRATION_REGRESSORS;
 /// Number of window lengths tested.
 pub const SCALES: usize = 3;
+/// Parts of [`Multiscale::transform_part`]: the calibration and block
+/// covariance, then two window covariances per part.
+pub const TRANSFORM_PARTS: usize = 1 + SCALES.div_ceil(2);
 
 type Phi<T> = SVector<T, REGRESSORS>;
 /// A window's mean residual, mean regressor and mean gain.
@@ -148,6 +153,8 @@ pub struct Multiscale<T: Real, const N: usize, const W: usize> {
     z: T,
     /// Residual blocks the training covariance rests on.
     trained_blocks: u32,
+    /// The block in work, one stage per monitor step.
+    work: staged::Work<T, N>,
 }
 
 impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
@@ -198,6 +205,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                 .map(T::lit)
                 .unwrap_or(T::zero()),
             trained_blocks: 0,
+            work: staged::Work::default(),
         }
     }
 
@@ -236,13 +244,33 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// Adds one block to the calibration (training, or in flight while
     /// quiet); `forget` applies the RLS forgetting factor first.
     pub fn learn_calibration(&mut self, p: &SVector<T, N>, phi: &Phi<T>, forget: bool) {
-        if forget {
-            let lambda = T::one() - T::one() / self.cfg.calibration_blocks;
-            self.sxx *= lambda;
-            self.spx *= lambda;
+        // `sxx` is symmetric: only its lower triangle is kept (the factor
+        // reads no more); `spx` rows beyond `dim` are zero (so are `p`'s).
+        let lambda = T::one() - T::one() / self.cfg.calibration_blocks;
+        let dim = self.dim.min(N);
+        let phis = phi.as_slice();
+        for (j, (col, fj)) in self
+            .sxx
+            .as_mut_slice()
+            .chunks_exact_mut(REGRESSORS)
+            .zip(phis.iter())
+            .enumerate()
+        {
+            for (x, fi) in col.iter_mut().zip(phis.iter()).skip(j) {
+                if forget {
+                    *x *= lambda;
+                }
+                *x += *fi * *fj;
+            }
         }
-        self.sxx += phi * phi.transpose();
-        self.spx += p * phi.transpose();
+        for (col, fj) in self.spx.as_mut_slice().chunks_exact_mut(N).zip(phis.iter()) {
+            for (x, pi) in col.iter_mut().zip(p.iter()).take(dim) {
+                if forget {
+                    *x *= lambda;
+                }
+                *x += *pi * *fj;
+            }
+        }
     }
 
     /// The calibration's Cholesky factor of `sxx + ridge`.
@@ -253,24 +281,29 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                 *d += *r;
             }
         }
-        cholesky(&a).ok()
+        cholesky_dim(&a, REGRESSORS)
     }
 
-    /// Prior residual `p̄ − C φ` of a block (before it is learned) and the
-    /// Cholesky factor used, `None` when the calibration cannot be solved.
-    pub fn residual(&self, p: &SVector<T, N>, phi: &Phi<T>) -> Option<SVector<T, N>> {
-        self.residual_with(&self.calibration_factor()?, p, phi)
-    }
-
-    /// [`residual`](Self::residual) with the calibration's factor given.
+    /// Prior residual `p̄ − C φ` of a block (before it is learned), with the
+    /// calibration's Cholesky factor `l`; `None` when not finite.
     fn residual_with(
         &self,
         l: &SMatrix<T, REGRESSORS, REGRESSORS>,
         p: &SVector<T, N>,
         phi: &Phi<T>,
     ) -> Option<SVector<T, N>> {
-        let c = cholesky_solve_right(l, &self.spx);
-        let r = p - c * phi;
+        // `C φ = spx (sxx + ridge)⁻¹ φ`: one solve for the regressor, not
+        // one per parity row for `C`.
+        let mut w = *phi;
+        forward(l, w.as_mut_slice(), REGRESSORS);
+        backward(l, w.as_mut_slice(), REGRESSORS);
+        let mut r = *p;
+        let dim = self.dim.min(N);
+        for (col, wj) in self.spx.as_slice().chunks_exact(N).zip(w.iter()) {
+            for (ri, c) in r.iter_mut().zip(col.iter()).take(dim) {
+                *ri -= *c * *wj;
+            }
+        }
         r.iter().all(|x| x.finite()).then_some(r)
     }
 
@@ -279,23 +312,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// `l` is the factor of [`calibration_factor`](Self::calibration_factor),
     /// computed once per block by the caller (`None`: no prediction term).
     fn prediction_weight(l: Option<&SMatrix<T, REGRESSORS, REGRESSORS>>, phi: &Phi<T>) -> T {
-        let Some(l) = l else {
-            return T::zero();
-        };
         // ‖L⁻¹ φ‖² by forward substitution.
-        let mut y = *phi;
-        for i in 0..REGRESSORS {
-            let mut s = y.get(i).copied().unwrap_or(T::zero());
-            for k in 0..i {
-                s -= l.get((i, k)).copied().unwrap_or(T::zero())
-                    * y.get(k).copied().unwrap_or(T::zero());
-            }
-            let d = l.get((i, i)).copied().unwrap_or(T::one());
-            if let Some(v) = y.get_mut(i) {
-                *v = s / d;
-            }
-        }
-        y.norm_squared()
+        l.map_or(T::zero(), |l| quad_form(l, phi, REGRESSORS))
     }
 
     /// Pushes a clipped residual, the raw one and its regressor into the
@@ -382,147 +400,11 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         // The offset is a long mean: its uncertainty is that of the longest
         // window, not of one block (the block covariance would make every
         // offset look insignificant next to the vibration).
-        let l = cholesky(&pad(self.window_cov.last()?, self.dim)).ok()?;
-        let (best, second) = best_two(&l, v, &offset, active);
+        let l = cholesky_dim(self.window_cov.last()?, self.dim)?;
+        let (best, second) = best_two(&l, v, &offset, active, self.dim);
         let (k, score, bias) = best?;
         let margin = score - second;
         (bias.abs() > self.cfg.offset_limit).then_some((k, bias, margin))
-    }
-
-    /// One monitoring block with parity vector `p` and regressor `phi`:
-    /// clips and stores its prior residual, tests every window length, and
-    /// learns from the block when every score is quiet. `None` when the
-    /// calibration cannot be solved (the block is skipped).
-    pub fn decide(
-        &mut self,
-        p: &SVector<T, N>,
-        phi: &Phi<T>,
-        level: T,
-        v: &SMatrix<T, N, N>,
-        active: &[bool; N],
-    ) -> Option<MultiscaleDecision<T>> {
-        // One factorisation of the calibration per block: the residual and
-        // the prediction variance of every window length use it (it changes
-        // only when the block is learned, at the end).
-        let cal = self.calibration_factor()?;
-        let raw_r = self.residual_with(&cal, p, phi)?;
-        // Standardised by the residual energy this vibration level predicts
-        // (see `scale`): the tests below all run on `r`.
-        let energy = self.scale.predict(level);
-        let gain = T::one() / energy.sqrt();
-        let r = &(raw_r * gain);
-        let mut out = MultiscaleDecision::default();
-        let Ok(lb) = cholesky(&self.block_cov) else {
-            return Some(out);
-        };
-        // Huber: bound the block's Mahalanobis norm.
-        let norm2 = mahalanobis2(&lb, r);
-        let norm = norm2.sqrt();
-        let bound = T::lit(self.dim as f64).sqrt() + self.cfg.huber;
-        let clipped = if norm > bound && norm.finite() {
-            r * (bound / norm)
-        } else {
-            *r
-        };
-        self.push(&clipped, &raw_r, phi, gain, level);
-        let means = self.window_means();
-        let mut best_ratio = T::zero();
-        let mut isolate: Option<(usize, T)> = None;
-        for (i, ((m, cov), (h_steady, len))) in means
-            .iter()
-            .zip(self.window_cov.iter())
-            .zip(self.scale_h.iter().zip(self.cfg.scales.iter()))
-            .enumerate()
-        {
-            let Some((rbar, phibar, gbar)) = m else {
-                continue;
-            };
-            let h = &self.early_threshold(*h_steady, *len);
-            let total = cov + self.block_cov * Self::prediction_weight(Some(&cal), phibar);
-            let Ok(l) = cholesky(&pad(&total, self.dim)) else {
-                continue;
-            };
-            let (best, second) = best_two(&l, v, rbar, active);
-            let Some((k, score, bias)) = best else {
-                continue;
-            };
-            let ratio = score / *h;
-            let margin = score - second;
-            if ratio > T::one() && isolate.is_none_or(|(_, m)| margin > m) {
-                isolate = Some((k, margin));
-            }
-            if ratio > best_ratio || out.suspect.is_none() {
-                best_ratio = ratio;
-                out = MultiscaleDecision {
-                    ratio,
-                    scale: i,
-                    suspect: Some(k),
-                    // Back to sensor units: a bias b shows as b × mean gain.
-                    bias: bias / gbar.max(T::lit(1e-6)),
-                    margin,
-                    isolate: None,
-                    learning: false,
-                    gross: false,
-                };
-            }
-        }
-        // Gross test: the shortest window unclipped, at `gross_factor` × the
-        // threshold.
-        let short = usize::from(self.cfg.scales[0]);
-        if let (Some(rbar), Some(cov)) = (self.raw_mean(short), self.window_cov.first()) {
-            if let Ok(l) = cholesky(&pad(cov, self.dim)) {
-                let (best, second) = best_two(&l, v, &rbar, active);
-                if let Some((k, score, bias)) = best {
-                    let h0 = self.scale_h.first().copied().unwrap_or(T::lit(1e6));
-                    let ratio = score / (h0 * self.cfg.gross_factor);
-                    if ratio > T::one() && ratio > best_ratio {
-                        best_ratio = ratio;
-                        out.ratio = ratio;
-                        out.scale = 0;
-                        out.suspect = Some(k);
-                        out.bias = bias;
-                        out.margin = score - second;
-                        out.gross = true;
-                        isolate = Some((k, score - second));
-                    }
-                }
-            }
-        }
-        out.isolate = isolate;
-        if !best_ratio.finite() {
-            out.ratio = T::zero();
-            out.suspect = None;
-            return Some(out);
-        }
-        // Learn only from quiet blocks, and only once the longest window
-        // has been quiet throughout (a fault's onset must not be learned
-        // before it is visible).
-        if best_ratio < self.cfg.learn_below {
-            self.quiet_blocks = self.quiet_blocks.saturating_add(1);
-        } else {
-            self.quiet_blocks = 0;
-        }
-        let longest = u32::from(self.cfg.scales[SCALES - 1]);
-        if self.quiet_blocks > longest {
-            out.learning = true;
-            self.learn_calibration(p, phi, true);
-            self.updates = self.updates.saturating_add(1);
-            let w = T::one() / T::lit(f64::from(self.updates)).min(self.cfg.variance_blocks);
-            let d = clipped * clipped.transpose();
-            self.block_cov = pad(&(self.block_cov * (T::one() - w) + d * w), self.dim);
-            // The block's raw energy in block-covariance units.
-            let dimf = T::lit(self.dim.max(1) as f64);
-            self.scale.learn(level, energy * norm2 / dimf, w);
-            for (cov, m) in self.window_cov.iter_mut().zip(means.iter()) {
-                if let Some((rbar, _, _)) = m {
-                    *cov = pad(
-                        &(*cov * (T::one() - w) + rbar * rbar.transpose() * w),
-                        self.dim,
-                    );
-                }
-            }
-        }
-        Some(out)
     }
 
     /// The threshold of a window of `len` blocks now: the squared t
@@ -556,19 +438,27 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         self.quiet_blocks = 0;
     }
 
-    /// Carries everything learned into a sub-space: `c` maps this space's
-    /// parity vectors to the sub-space's (`p_new = c p`), `dim` is the new
-    /// dimension.
-    pub fn transform(&mut self, c: &SMatrix<T, N, N>, dim: usize) {
-        self.dim = dim;
-        self.spx = c * self.spx;
-        self.block_cov = pad(&(c * self.block_cov * c.transpose()), dim);
-        for cov in self.window_cov.iter_mut() {
-            *cov = pad(&(c * *cov * c.transpose()), dim);
+    /// Carries everything learned into a sub-space, part `part` of
+    /// [`TRANSFORM_PARTS`] (one per monitor step, issue 17): `c` maps this
+    /// space's parity vectors to the sub-space's (`p_new = c p`), `dim` is
+    /// the new dimension. The window restarts (its residuals are not
+    /// carried).
+    pub fn transform_part(&mut self, c: &SMatrix<T, N, N>, dim: usize, part: usize) {
+        match part {
+            0 => {
+                // A block in work belongs to the old space.
+                self.cancel();
+                self.clear_window();
+                self.dim = dim;
+                self.spx = c * self.spx;
+                self.block_cov = pad(&(c * self.block_cov * c.transpose()), dim);
+            }
+            _ => {
+                let first = (part - 1) * 2;
+                for cov in self.window_cov.iter_mut().skip(first).take(2) {
+                    *cov = pad(&(c * *cov * c.transpose()), dim);
+                }
+            }
         }
-        for r in self.residuals.iter_mut() {
-            *r = c * *r;
-        }
-        self.clear_window();
     }
 }

@@ -4,7 +4,7 @@
 
 use cortex_m_semihosting::hprintln;
 use hal_sim::array::ArraySim;
-use imu_fdi::parity::{Geometry, ParityConfig, ParityMonitor, ParityPhase, Reading};
+use imu_fdi::parity::{BlockStage, Geometry, ParityConfig, ParityMonitor, ParityPhase, Reading};
 
 use imu_fdi_qemu::instructions;
 
@@ -19,6 +19,69 @@ struct ParityRun {
     isolated: Option<(usize, f64)>,
     /// `early(t, phase)` held at a step with an alarm or an isolation.
     early_alarm: bool,
+    /// Largest instructions of any step, training included.
+    max_all: u32,
+    /// Instructions per step by the block stage it ran ([`stage_index`];
+    /// plain samples: monitoring ones only): count, sum, largest.
+    stages: [(u32, u64, u32); STAGE_SLOTS],
+}
+
+/// Slots of [`ParityRun::stages`].
+const STAGE_SLOTS: usize = 19;
+/// Names of the slots, in [`stage_index`] order.
+const STAGE_NAMES: [&str; STAGE_SLOTS] = [
+    "sample",
+    "factor",
+    "residual",
+    "window",
+    "scale0",
+    "scale1",
+    "scale2",
+    "gross",
+    "learn",
+    "offset",
+    "train-residual",
+    "train-finish0",
+    "train-finish1",
+    "train-finish2",
+    "train-finish3+",
+    "reconfigure: space",
+    "reconfigure: 1 (white: projections + PCA; multi-scale: calibration)",
+    "reconfigure: 2 (white: a CUSUM half; multi-scale: windows)",
+    "reconfigure: 3+ (white: CUSUM halves; multi-scale: windows)",
+];
+
+/// Slot of the stage a step ran (`None`: a plain sample, or one closing a
+/// block).
+fn stage_index(s: Option<BlockStage>) -> usize {
+    match s {
+        None => 0,
+        Some(BlockStage::Factor) => 1,
+        Some(BlockStage::Residual) => 2,
+        Some(BlockStage::Window) => 3,
+        Some(BlockStage::Scale(i)) => 4 + usize::from(i.min(2)),
+        Some(BlockStage::Gross) => 7,
+        Some(BlockStage::Learn) => 8,
+        Some(BlockStage::Offset) => 9,
+        Some(BlockStage::TrainResidual) => 10,
+        Some(BlockStage::TrainFinish(i)) => 11 + usize::from(i.min(3)),
+        Some(BlockStage::Reconfigure(i)) => 15 + usize::from(i.min(3)),
+    }
+}
+
+/// Prints the instructions per block stage of a run.
+fn print_stages(r: &ParityRun) {
+    for (name, (n, sum, max)) in STAGE_NAMES.iter().zip(r.stages.iter()) {
+        if *n > 0 {
+            hprintln!(
+                "  stage {}: {} steps, mean {} max {} instructions",
+                name,
+                n,
+                sum / u64::from(*n),
+                max
+            );
+        }
+    }
 }
 
 /// Runs `sim` through a monitor of `g` and `cfg`, timing every step.
@@ -34,15 +97,26 @@ fn run<const N: usize, const W: usize>(
     let (mut sum, mut n, mut max) = (0u64, 0u64, 0u32);
     let mut isolated = None;
     let mut early_alarm = false;
+    let mut max_all = 0u32;
+    let mut stages = [(0u32, 0u64, 0u32); STAGE_SLOTS];
     for s in sim {
         let r: [Reading<f32>; N] = s.readings.map(|r| r.map(|x| x as f32));
+        let slot = stage_index(m.pending_stage());
         let t0 = instructions();
         let rep = core::hint::black_box(m.step(&r));
         let c = instructions().wrapping_sub(t0);
+        max_all = max_all.max(c);
         if rep.phase == ParityPhase::Monitoring {
             sum += u64::from(c);
             n += 1;
             max = max.max(c);
+        }
+        if rep.phase == ParityPhase::Monitoring || slot != 0 {
+            if let Some((k, total, top)) = stages.get_mut(slot) {
+                *k += 1;
+                *total += u64::from(c);
+                *top = (*top).max(c);
+            }
         }
         if early(s.t, rep.phase) && (rep.fault || rep.isolated.is_some()) {
             early_alarm = true;
@@ -57,6 +131,8 @@ fn run<const N: usize, const W: usize>(
         max,
         isolated,
         early_alarm,
+        max_all,
+        stages,
     })
 }
 
@@ -77,6 +153,11 @@ pub(crate) fn parity_s4_on_target() -> Result<(), &'static str> {
         r.max,
         core::mem::size_of::<ParityMonitor<f32, 6, 16>>()
     );
+    hprintln!(
+        "  largest step including training: {} instructions",
+        r.max_all
+    );
+    print_stages(&r);
     if r.early_alarm {
         return Err("alarm before the fault");
     }
@@ -125,6 +206,11 @@ pub(crate) fn parity_flight_on_target() -> Result<(), &'static str> {
         r.max,
         core::mem::size_of::<ParityMonitor<f32, 9, 40>>()
     );
+    hprintln!(
+        "  largest step including training: {} instructions",
+        r.max_all
+    );
+    print_stages(&r);
     if r.early_alarm {
         return Err("alarm before the fault");
     }

@@ -1,0 +1,157 @@
+//! Reconfiguration after an isolation or a failure, in stages (issue 17):
+//! the reduced parity space, then either the white-noise tests rebuilt
+//! ([`build_stage`]) or the multi-scale tests' learning carried into the
+//! new space, one stage per step, instead of all in the step that isolated.
+//! (The white-noise tests' construction at the end of training and of
+//! calibration still runs in one step, ≈ 168 k instructions on the M4F:
+//! the lead-in's calibration and monitoring start on the next sample.) The tests are idle meanwhile (their window and
+//! CUSUMs restart after a reconfiguration anyway) and fusion goes on; what
+//! the stages build is what the one-shot reconfiguration built, in use at
+//! most [`reconfig_steps`] steps later.
+
+use nalgebra::SMatrix;
+
+use crate::math::Real;
+
+use super::super::multiscale::{Multiscale, TRANSFORM_PARTS};
+use super::super::training::{Baseline, Trainer};
+use super::white::{build_stage, build_stages, Newton};
+use super::{ParityMonitor, ParityPhase};
+
+/// Steps a reconfiguration takes at most with `N` sensors.
+pub const fn reconfig_steps(n: usize) -> usize {
+    let white = 1 + build_stages(n);
+    let multiscale = 1 + TRANSFORM_PARTS;
+    if white > multiscale {
+        white
+    } else {
+        multiscale
+    }
+}
+
+/// Reconfiguration in progress.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Reconfig<T: Real, const N: usize> {
+    /// None.
+    Idle,
+    /// The space without sensor `k` next.
+    Space(usize),
+    /// White-noise tests: build stage `.0` next (the tests in progress are
+    /// in `tests`); `.1` the CUSUM threshold's root search in progress.
+    Tests(usize, Newton),
+    /// Multi-scale tests: part `.1` of carrying the learning through the
+    /// transition `.0` (`p_new = c p`; in part 0 still the old space's `V`,
+    /// from which the transition is formed).
+    Transform(SMatrix<T, N, N>, usize),
+}
+
+impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
+    /// The tests run on this step (no reconfiguration in progress).
+    pub(super) fn configured(&self) -> bool {
+        matches!(self.reconfig, Reconfig::Idle)
+    }
+
+    /// Index of the reconfiguration stage next (see
+    /// [`BlockStage::Reconfigure`](crate::parity::BlockStage::Reconfigure)).
+    pub(super) fn reconfig_stage(&self) -> u8 {
+        let i = match self.reconfig {
+            Reconfig::Idle | Reconfig::Space(_) => 0,
+            Reconfig::Tests(stage, _) => 1 + stage,
+            Reconfig::Transform(_, part) => 1 + part,
+        };
+        u8::try_from(i).unwrap_or(u8::MAX)
+    }
+
+    /// Samples go into the tests on this step: no reconfiguration in
+    /// progress, or only the multi-scale learning being carried (the
+    /// samples accumulate in the new space meanwhile; a block closing
+    /// finishes the carrying first).
+    pub(super) fn accepts_samples(&self) -> bool {
+        matches!(self.reconfig, Reconfig::Idle | Reconfig::Transform(..))
+    }
+
+    /// Runs one stage of the reconfiguration in progress (`to_end`: all).
+    pub(super) fn advance_reconfig(&mut self, to_end: bool) {
+        loop {
+            match self.reconfig {
+                Reconfig::Idle => return,
+                Reconfig::Space(k) => {
+                    self.reconfig = Reconfig::Idle;
+                    self.reduce(k);
+                }
+                Reconfig::Tests(stage, mut newton) => {
+                    self.reconfig = Reconfig::Idle;
+                    let built = self.tests.as_mut().and_then(|t| {
+                        let (cfg, space) = (&self.cfg, &self.space);
+                        build_stage(t, stage, &mut newton, space, cfg, &self.scales, &self.chi2)
+                    });
+                    match built {
+                        None => {
+                            self.tests = None;
+                            self.phase = ParityPhase::Lost;
+                        }
+                        Some(next) if next < build_stages(N) => {
+                            self.reconfig = Reconfig::Tests(next, newton);
+                        }
+                        Some(_) => {}
+                    }
+                }
+                Reconfig::Transform(m, part) => {
+                    self.reconfig = Reconfig::Idle;
+                    // Part 0 holds the old space's `V`: the transition
+                    // `c = V_new V_oldᵀ` is formed here, not in the
+                    // (isolating) step that built the new space.
+                    let c = if part == 0 {
+                        self.space.v() * m.transpose()
+                    } else {
+                        m
+                    };
+                    let dim = self.space.dim();
+                    if let Some(ms) = self.ms.as_mut() {
+                        ms.transform_part(&c, dim, part);
+                    }
+                    if part + 1 < TRANSFORM_PARTS {
+                        self.reconfig = Reconfig::Transform(c, part + 1);
+                    }
+                }
+            }
+            if !to_end {
+                return;
+            }
+        }
+    }
+
+    /// The space without sensor `k` (already marked removed), and what
+    /// carries into it: the white-noise baseline through the transition
+    /// (its tests rebuilt in the next stages), the multi-scale learning
+    /// (carried in the next stages), or training restarted.
+    fn reduce(&mut self, k: usize) {
+        let Some(sub) = self.reduced_space(k) else {
+            return;
+        };
+        if let Some(ms) = self.ms.as_mut() {
+            if self.ms_trained {
+                ms.cancel();
+                self.reconfig = Reconfig::Transform(*self.space.v(), 0);
+            } else {
+                // Failed while training: train the reduced set.
+                *ms = Multiscale::new(self.cfg.multiscale, sub.dim(), ms.threshold_set());
+                self.ms_blocks = 0;
+            }
+        }
+        if let Some(t) = self.tests.as_mut() {
+            let c = self.space.transition_to(&sub);
+            t.baseline = Baseline {
+                offset: c * t.baseline.offset,
+                leak: c * t.baseline.leak,
+                block_cov: c * t.baseline.block_cov * c.transpose(),
+                correlation_factor: t.baseline.correlation_factor,
+            };
+            self.reconfig = Reconfig::Tests(0, Newton::START);
+        } else if self.ms.is_none() {
+            // Failed during training: start training the reduced set.
+            self.trainer = Trainer::new(self.cfg.train_samples, self.cfg.block_len, self.cfg.ridge);
+        }
+        self.space = sub;
+    }
+}

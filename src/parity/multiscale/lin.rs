@@ -1,0 +1,255 @@
+//! Small dense kernels for the multi-scale tests on the leading `dim`
+//! coordinates only (issue 14).
+//!
+//! The covariances of the tests are `N × N` with the identity beyond the
+//! parity dimension (`pad`), and parity vectors are zero there, so every
+//! factorisation and solve can stop at `dim` (6 of 9 for three triads:
+//! a third of the Cholesky work). The kernels walk nalgebra's column-major
+//! storage with iterators — no bounds-checked indexing in the loops — and
+//! use forward substitution only where a quadratic form is all that is
+//! needed (`dᵀ A⁻¹ d = ‖L⁻¹ d‖²`), half the work of a full solve.
+
+use nalgebra::{SMatrix, SVector};
+
+use crate::math::Real;
+
+/// The covariance restricted to the first `dim` coordinates, with identity
+/// beyond so the fixed-size factorisation is full rank.
+pub(super) fn pad<T: Real, const N: usize>(a: &SMatrix<T, N, N>, dim: usize) -> SMatrix<T, N, N> {
+    SMatrix::<T, N, N>::from_fn(|i, j| {
+        if i < dim && j < dim {
+            // Symmetrised: EWMA updates keep it so only up to rounding.
+            let aij = a.get((i, j)).copied().unwrap_or(T::zero());
+            let aji = a.get((j, i)).copied().unwrap_or(T::zero());
+            (aij + aji) * T::lit(0.5)
+        } else if i == j {
+            T::one()
+        } else {
+            T::zero()
+        }
+    })
+}
+
+/// Cholesky factor `L` (lower) of the leading `dim × dim` block of `a`
+/// (lower triangle read), identity beyond; `None` when that block is not
+/// positive definite or not finite. The column operations and their order
+/// are those of `crate::math::cholesky`.
+pub(super) fn cholesky_dim<T: Real, const N: usize>(
+    a: &SMatrix<T, N, N>,
+    dim: usize,
+) -> Option<SMatrix<T, N, N>> {
+    let dim = dim.min(N);
+    let mut l = SMatrix::<T, N, N>::identity();
+    for (j, (dst, src)) in l
+        .as_mut_slice()
+        .chunks_exact_mut(N)
+        .zip(a.as_slice().chunks_exact(N))
+        .enumerate()
+        .take(dim)
+    {
+        for (d, s) in dst.iter_mut().zip(src.iter()).take(dim).skip(j) {
+            *d = *s;
+        }
+    }
+    let s = l.as_mut_slice();
+    for j in 0..dim {
+        let (done, rest) = s.split_at_mut(j * N);
+        let col_j = rest.get_mut(j..dim)?;
+        for col_k in done.chunks_exact(N) {
+            let f = *col_k.get(j)?;
+            for (d, x) in col_j.iter_mut().zip(col_k.get(j..dim)?.iter()) {
+                *d -= f * *x;
+            }
+        }
+        let (d, below) = col_j.split_first_mut()?;
+        if !(*d > T::zero() && d.finite()) {
+            return None;
+        }
+        let root = d.sqrt_fast();
+        *d = root;
+        let inv = T::one() / root;
+        for x in below.iter_mut() {
+            *x *= inv;
+        }
+    }
+    Some(l)
+}
+
+/// `b ← L⁻¹ b` on the first `dim` entries (forward substitution).
+pub(super) fn forward<T: Real, const N: usize>(l: &SMatrix<T, N, N>, b: &mut [T], dim: usize) {
+    let dim = dim.min(N);
+    for (j, col) in l.as_slice().chunks_exact(N).enumerate().take(dim) {
+        let (head, tail) = b.split_at_mut((j + 1).min(b.len()));
+        let (Some(yj), Some(ljj), Some(below)) = (head.last_mut(), col.get(j), col.get(j + 1..dim))
+        else {
+            return;
+        };
+        *yj /= *ljj;
+        let y = *yj;
+        for (bi, lij) in tail.iter_mut().zip(below.iter()) {
+            *bi -= *lij * y;
+        }
+    }
+}
+
+/// `b ← L⁻ᵀ b` on the first `dim` entries (backward substitution).
+pub(super) fn backward<T: Real, const N: usize>(l: &SMatrix<T, N, N>, b: &mut [T], dim: usize) {
+    let dim = dim.min(N);
+    for (i, col) in l.as_slice().chunks_exact(N).enumerate().take(dim).rev() {
+        let (head, tail) = b.split_at_mut((i + 1).min(b.len()));
+        let (Some(xi), Some(lii), Some(below)) = (head.last_mut(), col.get(i), col.get(i + 1..dim))
+        else {
+            return;
+        };
+        let s = dot(below, tail);
+        *xi = (*xi - s) / *lii;
+    }
+}
+
+/// `Σ aᵢ bᵢ` over the shorter of the two.
+pub(super) fn dot<T: Real>(a: &[T], b: &[T]) -> T {
+    a.iter()
+        .zip(b.iter())
+        .fold(T::zero(), |acc, (x, y)| acc + *x * *y)
+}
+
+/// `dᵀ A⁻¹ d = ‖L⁻¹ d‖²` on the first `dim` coordinates.
+pub(super) fn quad_form<T: Real, const N: usize>(
+    l: &SMatrix<T, N, N>,
+    d: &SVector<T, N>,
+    dim: usize,
+) -> T {
+    let mut y = *d;
+    forward(l, y.as_mut_slice(), dim);
+    let y = y.as_slice().get(..dim.min(N)).unwrap_or(&[]);
+    dot(y, y)
+}
+
+/// Best single-sensor hypothesis `(k, score, bias)` for the parity residual
+/// `r` with covariance factor `l` on the first `dim` coordinates, and the
+/// runner-up's score: `z_k = v_kᵀ Σ⁻¹ r = (L⁻¹v_k)·(L⁻¹r)`,
+/// `q_k = ‖L⁻¹ v_k‖²`, score `z_k²/q_k`, bias `z_k/q_k`.
+pub(super) fn best_two<T: Real, const N: usize>(
+    l: &SMatrix<T, N, N>,
+    v: &SMatrix<T, N, N>,
+    r: &SVector<T, N>,
+    active: &[bool; N],
+    dim: usize,
+) -> (Option<(usize, T, T)>, T) {
+    let dim = dim.min(N);
+    let mut s = *r;
+    forward(l, s.as_mut_slice(), dim);
+    let s = s.as_slice().get(..dim).unwrap_or(&[]);
+    let mut best: Option<(usize, T, T)> = None;
+    let mut second = T::zero();
+    for (k, (col, on)) in v.as_slice().chunks_exact(N).zip(active.iter()).enumerate() {
+        if !on {
+            continue;
+        }
+        let mut u = [T::zero(); N];
+        for (d, x) in u.iter_mut().zip(col.iter()).take(dim) {
+            *d = *x;
+        }
+        forward(l, &mut u, dim);
+        let u = u.get(..dim).unwrap_or(&[]);
+        let q = dot(u, u);
+        if q.partial_cmp(&T::lit(1e-12)) != Some(core::cmp::Ordering::Greater) {
+            continue;
+        }
+        let zk = dot(u, s);
+        let score = zk * zk / q;
+        match best {
+            Some((_, sc, _)) if score <= sc => second = second.max(score),
+            _ => {
+                if let Some((_, sc, _)) = best {
+                    second = second.max(sc);
+                }
+                best = Some((k, score, zk / q));
+            }
+        }
+    }
+    (best, second)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::cholesky;
+
+    /// A 9×9 covariance padded beyond `dim` = 6, as the tests hold them.
+    fn padded() -> SMatrix<f64, 9, 9> {
+        let b = SMatrix::<f64, 9, 9>::from_fn(|i, j| ((i * 7 + j * 3) % 5) as f64 - 2.0);
+        let a = b * b.transpose() + SMatrix::identity() * 3.0;
+        SMatrix::from_fn(|i, j| {
+            if i < 6 && j < 6 {
+                a[(i, j)]
+            } else if i == j {
+                1.0
+            } else {
+                0.0
+            }
+        })
+    }
+
+    #[test]
+    fn factor_and_solves_match_the_full_size_ones() {
+        let a = padded();
+        let l = cholesky_dim(&a, 6).unwrap();
+        let full = cholesky(&a).unwrap();
+        assert!((l - full).abs().max() < 1e-12, "{l} vs {full}");
+        // Solve A x = b both ways.
+        let b = SVector::<f64, 9>::from_fn(|i, _| if i < 6 { i as f64 - 2.5 } else { 0.0 });
+        let mut x = b;
+        forward(&l, x.as_mut_slice(), 6);
+        backward(&l, x.as_mut_slice(), 6);
+        assert!((a * x - b).norm() < 1e-10);
+        let q = quad_form(&l, &b, 6);
+        let want = b.dot(&(a.try_inverse().unwrap() * b));
+        assert!((q - want).abs() < 1e-10 * want);
+        // Not positive definite: refused.
+        let mut bad = a;
+        bad[(2, 2)] = -1.0;
+        assert!(cholesky_dim(&bad, 6).is_none());
+    }
+
+    #[test]
+    fn best_two_matches_the_closed_form() {
+        let a = padded();
+        let l = cholesky_dim(&a, 6).unwrap();
+        let v = SMatrix::<f64, 9, 9>::from_fn(|i, j| {
+            if i < 6 {
+                (((i + 2) * (j + 1)) % 7) as f64 - 3.0
+            } else {
+                0.0
+            }
+        });
+        let r = SVector::<f64, 9>::from_fn(|i, _| if i < 6 { 0.3 * i as f64 - 1.0 } else { 0.0 });
+        let inv = a.try_inverse().unwrap();
+        let mut active = [true; 9];
+        active[4] = false;
+        let scores: Vec<(usize, f64, f64)> = (0..9)
+            .filter(|k| active[*k])
+            .map(|k| {
+                let vk = v.column(k);
+                let z = vk.dot(&(inv * r));
+                let q = vk.dot(&(inv * vk));
+                (k, z * z / q, z / q)
+            })
+            .collect();
+        let best = scores
+            .iter()
+            .cloned()
+            .fold(scores[0], |b, s| if s.1 > b.1 { s } else { b });
+        let second = scores
+            .iter()
+            .filter(|s| s.0 != best.0)
+            .map(|s| s.1)
+            .fold(0.0, f64::max);
+        let (got, got_second) = best_two(&l, &v, &r, &active, 6);
+        let got = got.unwrap();
+        assert_eq!(got.0, best.0);
+        assert!((got.1 - best.1).abs() < 1e-9 * best.1);
+        assert!((got.2 - best.2).abs() < 1e-9 * best.2.abs().max(1.0));
+        assert!((got_second - second).abs() < 1e-9 * second.max(1.0));
+    }
+}
