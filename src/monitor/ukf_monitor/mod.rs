@@ -335,7 +335,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // second-order term changes X by < 1e-3 relative per step (largest
         // entry of A² dt²/2 ≈ g·ω·dt² against g·dt) and X is re-anchored by
         // every update, while it saves a 6×6 product per IMU period.
-        self.sensitivity += VehicleModel::mul_state_jacobian(&a, &(self.sensitivity * dt)) + b * dt;
+        // X ← X + (A X + B) dt: one scaling by dt instead of two.
+        self.sensitivity += (VehicleModel::mul_state_jacobian(&a, &self.sensitivity) + b) * dt;
         self.last_input_b = b;
         // The state history only serves a configured aiding latency.
         if self.delay_steps > 0 {
