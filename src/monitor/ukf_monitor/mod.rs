@@ -11,7 +11,7 @@ use crate::detect::{
     PAPER_MATRIX_AS_PRINTED, PAPER_MATRIX_CORRECTED,
 };
 use crate::filter::{ChannelDiag, Gate, Ukf, UkfError};
-use crate::math::{wrap_pi, Real};
+use crate::math::{try_inverse, wrap_pi, Real};
 use crate::model::{
     discrete_process_noise_structured, ImuVec, Mat6, Measurement, MeasurementModel, ModelError,
     StateVec, VehicleModel, NX, NZ, ROLL, STATE_ANGLES,
@@ -97,9 +97,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let mut meas = MeasurementModel::new(cfg.aiding);
         meas.lever_arm = Vector3::new(cfg.lever_arm[0], cfg.lever_arm[1], cfg.lever_arm[2]);
         let paper_inv = match cfg.detector {
-            Detector::PaperMatrix => paper_matrix::<T>(&PAPER_MATRIX_CORRECTED).try_inverse(),
+            Detector::PaperMatrix => try_inverse(&paper_matrix::<T>(&PAPER_MATRIX_CORRECTED)),
             Detector::PaperMatrixAsPrinted => {
-                paper_matrix::<T>(&PAPER_MATRIX_AS_PRINTED).try_inverse()
+                try_inverse(&paper_matrix::<T>(&PAPER_MATRIX_AS_PRINTED))
             }
             _ => None,
         };
@@ -229,8 +229,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         if self.phase == Phase::Aligning {
             let omega = lever_arm_rates(in_range, imu);
             self.try_align(aiding, &omega);
-            let shown = if in_range { imu } else { &self.prev_imu };
-            self.report = self.compose(shown, health, false);
+            let shown = if in_range { *imu } else { self.prev_imu };
+            self.compose(&shown, health, false);
             return self.report;
         }
 
@@ -295,8 +295,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.advance_phase();
         // The corrected sample of an invalid one is the stand-in the filter
         // used (the last good sample): no NaN reaches a flight controller.
-        let shown = if in_range { imu } else { &self.prev_imu };
-        self.report = self.compose(shown, health, updated);
+        let shown = if in_range { *imu } else { self.prev_imu };
+        self.compose(&shown, health, updated);
         self.report
     }
 
@@ -489,9 +489,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
     }
 
+    /// Writes this step's report into `self.report` in place (no copy of
+    /// the ≈ 340-byte report through a return value, issue 17).
     #[inline(never)] // own stack frame and one copy (issue 17)
-    fn compose(&self, imu: &ImuVec<T>, health: Health, updated: bool) -> UkfReport<T> {
-        let mut r = self.report;
+    fn compose(&mut self, imu: &ImuVec<T>, health: Health, updated: bool) {
+        let r = &mut self.report;
         r.phase = self.phase;
         if self.phase != Phase::Monitoring {
             r.status = [ChannelState::NotMonitored; NZ];
@@ -521,6 +523,5 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         if !updated {
             r.detail.diag = [ChannelDiag::default(); NZ];
         }
-        r
     }
 }
