@@ -322,7 +322,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let reset = match self.ukf.predict_split(
             &VehicleModel::<T>::SPLIT_ORDER,
             VehicleModel::<T>::NONLINEAR_STATES,
-            |s| model.step(s, u, dt),
+            // The sigma points' attitude trigonometry shifted from the mean's.
+            |s| model.step_near(s, &x, &trig, u, dt),
             |d| model.step_deviation(d, u, dt),
             &q,
         ) {
