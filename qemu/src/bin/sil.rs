@@ -147,12 +147,15 @@ fn main() -> ! {
         finish(false)
     };
     let overhead = overhead();
+    let r0 = imu_fdi::monitor::UkfReport::<f32>::default();
     let (mut all, mut predict_only, mut with_update) =
         (Cost::default(), Cost::default(), Cost::default());
     // Deepest stack use below `main`'s frame: of the monitor steps, and of
     // everything else (simulator, tally) between them.
     let (mut step_stack, mut other_stack) = (0u32, 0u32);
     let mut sp = 0usize;
+    // The most expensive step: its index, phase, health flags and verdicts.
+    let mut slowest = (0u32, r0.phase, r0.health, r0.status);
     for s in sim {
         let u = ImuVec::from_fn(|i, _| s.imu.map_or(f32::NAN, |v| v[i] as f32));
         let z = MeasVec::from_fn(|i, _| s.aiding[i] as f32);
@@ -169,6 +172,9 @@ fn main() -> ! {
         let r = monitor.step(&u, s.dt as f32, &m);
         let cost = instructions().wrapping_sub(t0).saturating_sub(overhead);
         step_stack = step_stack.max(depth_below(sp));
+        if cost > all.max {
+            slowest = (all.n, r.phase, r.health, r.status);
+        }
         all.add(cost);
         if r.updated {
             with_update.add(cost);
@@ -193,6 +199,13 @@ fn main() -> ! {
         with_update.mean(),
         with_update.max,
         with_update.n
+    );
+    hprintln!(
+        "  slowest: step {} ({:?}, {:?}, {:?})",
+        slowest.0,
+        slowest.1,
+        slowest.2,
+        slowest.3
     );
     if sp == 0 {
         hprintln!("no steps");
