@@ -17,7 +17,7 @@
 //! `bench_aiding` with the DVL/compass or GNSS receiver.
 //!
 //! Build: `cargo build-firmware`; flash and run with probe-rs:
-//! `probe-rs run --chip STM32F405RGTx target/thumbv7em-none-eabihf/release/firmware`.
+//! `probe-rs run --chip STM32F405RGTx target/thumbv7em-none-eabihf/mcu/firmware`.
 #![no_std]
 #![no_main]
 
