@@ -38,7 +38,10 @@ fn split_update_matches_the_plain_update_for_m2() {
     let meas = MeasurementModel::<f64>::new(AidingKind::GnssAttitude);
     let omega = Vector3::new(0.1, -0.05, 0.3);
     let (x, p) = start();
-    let z = meas.predict(&(x + StateVec::new(0.2, -0.1, 0.05, 0.01, -0.01, 0.02)), &omega);
+    let z = meas.predict(
+        &(x + StateVec::new(0.2, -0.1, 0.05, 0.01, -0.01, 0.02)),
+        &omega,
+    );
     let r = MeasVec::new(0.04, 0.04, 0.04, 1e-4, 1e-4, 1e-4);
     let params = SigmaParams::default();
     let mut plain = Ukf::<f64, 6, 13>::new(x, p, &params, STATE_ANGLES).unwrap();
@@ -106,5 +109,8 @@ fn split_predict_matches_the_plain_predict() {
     let (dx, dp) = gaps(&plain, &split);
     assert!(dx < 1e-3 && dp < 1e-3, "state {dx:e} σ, covariance {dp:e}");
     let (dx, dp) = gaps(&split, &near);
-    assert!(dx < 1e-9 && dp < 1e-9, "step_near: state {dx:e} σ, covariance {dp:e}");
+    assert!(
+        dx < 1e-9 && dp < 1e-9,
+        "step_near: state {dx:e} σ, covariance {dp:e}"
+    );
 }

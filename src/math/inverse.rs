@@ -86,7 +86,11 @@ mod tests {
         });
         let want = m.try_inverse().unwrap();
         let got = try_inverse(&m).unwrap();
-        assert!((got - want).amax() < 1e-12 * want.amax(), "{:e}", (got - want).amax());
+        assert!(
+            (got - want).amax() < 1e-12 * want.amax(),
+            "{:e}",
+            (got - want).amax()
+        );
         assert!((m * got - Matrix6::identity()).amax() < 1e-12);
         // A zero leading entry needs the row swap.
         let p = Matrix6::<f64>::identity().remove_row(0).insert_row(5, 0.0);

@@ -442,9 +442,15 @@ mod tests {
         let s = StateVec::new(1.0, 0.0, 0.0, 0.0, 1.5, 0.0);
         let near = StateVec::new(1.0, 0.0, 0.0, 0.0, 1.45, 0.0);
         let tn = m.attitude_trig(&near).unwrap();
-        assert_eq!(m.step_near(&s, &near, &tn, &u, 0.01), Err(ModelError::PitchSingularity));
+        assert_eq!(
+            m.step_near(&s, &near, &tn, &u, 0.01),
+            Err(ModelError::PitchSingularity)
+        );
         let n = StateVec::new(0.0, 0.0, 0.0, f64::NAN, 0.0, 0.0);
-        assert_eq!(m.step_near(&n, &x, &t, &u, 0.01), Err(ModelError::NonFinite));
+        assert_eq!(
+            m.step_near(&n, &x, &t, &u, 0.01),
+            Err(ModelError::NonFinite)
+        );
     }
 
     #[test]

@@ -173,10 +173,16 @@ fn main() -> ! {
         let cost = instructions().wrapping_sub(t0).saturating_sub(overhead);
         step_stack = step_stack.max(depth_below(sp));
         if cost > all.max {
-            let flagged = r.status.iter().filter(|c| {
-                matches!(c, ChannelState::FaultPositive | ChannelState::FaultNegative)
-            });
-            slowest = (all.n, r.phase == Phase::Monitoring, flagged.count(), r.updated);
+            let flagged = r
+                .status
+                .iter()
+                .filter(|c| matches!(c, ChannelState::FaultPositive | ChannelState::FaultNegative));
+            slowest = (
+                all.n,
+                r.phase == Phase::Monitoring,
+                flagged.count(),
+                r.updated,
+            );
         }
         all.add(cost);
         if r.updated {
