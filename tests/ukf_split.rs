@@ -6,6 +6,13 @@
 //! nonlinear states (another square root of `P`), so the bound is relative
 //! to `σ`, not to rounding.
 
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)] // test code: a panic is a failed assertion
+
 use imu_fdi::filter::{Gate, SigmaParams, Ukf};
 use imu_fdi::model::{
     AidingKind, ImuVec, Mat6, MeasVec, MeasurementModel, StateVec, VehicleModel, STATE_ANGLES,
