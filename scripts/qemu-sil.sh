@@ -11,7 +11,7 @@
 # Exits non-zero if a test fails, an image faults, or S2 is not detected.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-elf=target/thumbv7em-none-eabihf/release/sil
+elf=target/thumbv7em-none-eabihf/mcu/sil
 sizes() {
   size -A "$elf" | awk '$1 ~ /^\.(vector_table|text|rodata|data|bss|uninit)$/ { if ($1 != ".data" && $1 != ".bss" && $1 != ".uninit") f += $2; else r += $2 } END { printf "image: flash %d bytes (%.1f KiB; .vector_table + .text + .rodata), static RAM %d bytes (.data + .bss)\n", f, f / 1024, r }'
 }
@@ -40,7 +40,7 @@ if ! command -v arm-none-eabi-nm >/dev/null; then
   apt-get update -qq && apt-get install -y -qq binutils-arm-none-eabi >/dev/null
 fi
 cargo build-firmware -q
-fw=target/thumbv7em-none-eabihf/release/firmware
+fw=target/thumbv7em-none-eabihf/mcu/firmware
 flash() {
   size -A "$1" | awk '$1 ~ /^\.(vector_table|text|rodata)$/ { f += $2 } END { print f }'
 }

@@ -144,7 +144,7 @@ impl<T: Real> DecisionRule<'_, T> {
                     }
                 });
                 let c = runtime_sign_matrix(m_eff, self.min_fault, &sigma, self.sign_deadband);
-                match c.try_inverse() {
+                match crate::math::try_inverse(&c) {
                     Some(ci) => decouple_flags(&ci, flags).0,
                     None => [0; NZ],
                 }

@@ -5,6 +5,7 @@
 mod angle;
 mod cholesky;
 mod identity;
+mod inverse;
 mod jacobi;
 mod real;
 mod sqrt;
@@ -16,6 +17,7 @@ pub use cholesky::{
     LinalgError,
 };
 pub use identity::is_identity;
+pub use inverse::try_inverse;
 pub use jacobi::symmetric_eigen;
 pub use real::Real;
 pub use sqrt::sqrt_f32;

@@ -126,23 +126,37 @@ fn main() -> ! {
     use hal_sim::setup::{monitor_config, DetectionTally, RunOptions};
     use hal_sim::Simulator;
     use imu_fdi::model::{ImuVec, MeasVec, Measurement};
-    use imu_fdi::monitor::UkfMonitor;
+    use imu_fdi::monitor::{ChannelState, Phase, UkfMonitor};
 
-    let scn = Scenario::s2();
-    let cfg = monitor_config::<f32>(&scn, &RunOptions::default());
-    let Ok(mut monitor) = UkfMonitor::<f32>::new(cfg) else {
+    // The scenario, the simulator, the tally and the monitor live in static
+    // RAM (`.bss`), constructed once, as a flight controller keeps its
+    // monitors: on `main`'s stack they were 10 KB of a 16 KB peak (issue 17).
+    let Some(scn) = cortex_m::singleton!(: Scenario = Scenario::s2()) else {
+        finish(false)
+    };
+    let cfg = monitor_config::<f32>(scn, &RunOptions::default());
+    let Ok(m) = UkfMonitor::<f32>::new(cfg) else {
         hprintln!("invalid monitor configuration");
+        finish(false)
+    };
+    let (Some(monitor), Some(sim), Some(tally)) = (
+        cortex_m::singleton!(: UkfMonitor<f32> = m),
+        cortex_m::singleton!(: Simulator = Simulator::new(scn, 1)),
+        cortex_m::singleton!(: DetectionTally = DetectionTally::new(scn)),
+    ) else {
         finish(false)
     };
     let overhead = overhead();
     let (mut all, mut predict_only, mut with_update) =
         (Cost::default(), Cost::default(), Cost::default());
-    let mut tally = DetectionTally::new(&scn);
     // Deepest stack use below `main`'s frame: of the monitor steps, and of
     // everything else (simulator, tally) between them.
     let (mut step_stack, mut other_stack) = (0u32, 0u32);
     let mut sp = 0usize;
-    for s in Simulator::new(&scn, 1) {
+    // The most expensive step: its index, whether monitoring, how many
+    // channels it flagged, whether it had an aiding update.
+    let mut slowest = (0u32, false, 0usize, false);
+    for s in sim {
         let u = ImuVec::from_fn(|i, _| s.imu.map_or(f32::NAN, |v| v[i] as f32));
         let z = MeasVec::from_fn(|i, _| s.aiding[i] as f32);
         let m = Measurement {
@@ -158,6 +172,18 @@ fn main() -> ! {
         let r = monitor.step(&u, s.dt as f32, &m);
         let cost = instructions().wrapping_sub(t0).saturating_sub(overhead);
         step_stack = step_stack.max(depth_below(sp));
+        if cost > all.max {
+            let flagged = r
+                .status
+                .iter()
+                .filter(|c| matches!(c, ChannelState::FaultPositive | ChannelState::FaultNegative));
+            slowest = (
+                all.n,
+                r.phase == Phase::Monitoring,
+                flagged.count(),
+                r.updated,
+            );
+        }
         all.add(cost);
         if r.updated {
             with_update.add(cost);
@@ -182,6 +208,13 @@ fn main() -> ! {
         with_update.mean(),
         with_update.max,
         with_update.n
+    );
+    hprintln!(
+        "  slowest: step {} (monitoring {}, {} channels flagged, aiding update {})",
+        slowest.0,
+        slowest.1,
+        slowest.2,
+        slowest.3
     );
     if sp == 0 {
         hprintln!("no steps");

@@ -12,7 +12,7 @@ use crate::detect::{
     PAPER_MATRIX_AS_PRINTED, PAPER_MATRIX_CORRECTED,
 };
 use crate::filter::{ChannelDiag, Gate, Ukf, UkfError};
-use crate::math::{wrap_pi, Real};
+use crate::math::{try_inverse, wrap_pi, Real};
 use crate::model::{
     discrete_process_noise_structured, ImuVec, Mat6, Measurement, MeasurementModel, ModelError,
     StateVec, VehicleModel, NX, NZ, ROLL, STATE_ANGLES,
@@ -112,9 +112,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let mut meas = MeasurementModel::new(cfg.aiding);
         meas.lever_arm = Vector3::new(cfg.lever_arm[0], cfg.lever_arm[1], cfg.lever_arm[2]);
         let paper_inv = match cfg.detector {
-            Detector::PaperMatrix => paper_matrix::<T>(&PAPER_MATRIX_CORRECTED).try_inverse(),
+            Detector::PaperMatrix => try_inverse(&paper_matrix::<T>(&PAPER_MATRIX_CORRECTED)),
             Detector::PaperMatrixAsPrinted => {
-                paper_matrix::<T>(&PAPER_MATRIX_AS_PRINTED).try_inverse()
+                try_inverse(&paper_matrix::<T>(&PAPER_MATRIX_AS_PRINTED))
             }
             _ => None,
         };
@@ -254,8 +254,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         if self.phase == Phase::Aligning {
             let omega = lever_arm_rates(in_range, imu);
             self.try_align(aiding, &omega);
-            let shown = if in_range { imu } else { &self.prev_imu };
-            self.report = self.compose(shown, health, false);
+            let shown = if in_range { *imu } else { self.prev_imu };
+            self.compose(&shown, health, false);
             return self.report;
         }
 
@@ -321,8 +321,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.advance_phase();
         // The corrected sample of an invalid one is the stand-in the filter
         // used (the last good sample): no NaN reaches a flight controller.
-        let shown = if in_range { imu } else { &self.prev_imu };
-        self.report = self.compose(shown, health, updated);
+        let shown = if in_range { *imu } else { self.prev_imu };
+        self.compose(&shown, health, updated);
         self.report
     }
 
@@ -348,7 +348,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let reset = match self.ukf.predict_split(
             &VehicleModel::<T>::SPLIT_ORDER,
             VehicleModel::<T>::NONLINEAR_STATES,
-            |s| model.step(s, u, dt),
+            // The sigma points' attitude trigonometry shifted from the mean's.
+            |s| model.step_near(s, &x, &trig, u, dt),
             |d| model.step_deviation(d, u, dt),
             &q,
         ) {
@@ -361,7 +362,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // second-order term changes X by < 1e-3 relative per step (largest
         // entry of A² dt²/2 ≈ g·ω·dt² against g·dt) and X is re-anchored by
         // every update, while it saves a 6×6 product per IMU period.
-        self.sensitivity += VehicleModel::mul_state_jacobian(&a, &(self.sensitivity * dt)) + b * dt;
+        // X ← X + (A X + B) dt: one scaling by dt instead of two.
+        self.sensitivity += (VehicleModel::mul_state_jacobian(&a, &self.sensitivity) + b) * dt;
         self.last_input_b = b;
         // The state history serves a configured or estimated aiding latency.
         if self.keeps_history() {
@@ -422,11 +424,23 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 )
                 .map_err(UkfError::widen)?
         } else {
-            self.ukf.update_delayed(
+            // M2 is affine in the body velocity given the attitude: the split
+            // update maps those sigma points through the Jacobian at the
+            // centre (7 evaluations of `h` instead of 13, issue 17).
+            let (order, nonlinear) = meas.split();
+            let h_center = if delayed.is_some() {
+                meas.jacobian(&center, omega)
+            } else {
+                h
+            };
+            self.ukf.update_split(
                 &center,
+                &order,
+                nonlinear,
                 &aiding.z,
                 &available,
                 |s| Ok(meas.predict(s, omega)),
+                &h_center,
                 &r,
                 &MEAS_ANGLES,
                 &mut self.gate,
@@ -555,9 +569,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.persistence.reset();
     }
 
+    /// Writes this step's report into `self.report` in place (no copy of
+    /// the ≈ 340-byte report through a return value, issue 17).
     #[inline(never)] // own stack frame and one copy (issue 17)
-    fn compose(&self, imu: &ImuVec<T>, health: Health, updated: bool) -> UkfReport<T> {
-        let mut r = self.report;
+    fn compose(&mut self, imu: &ImuVec<T>, health: Health, updated: bool) {
+        let r = &mut self.report;
         r.phase = self.phase;
         if self.phase != Phase::Monitoring {
             r.status = [ChannelState::NotMonitored; NZ];
@@ -587,6 +603,5 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         if !updated {
             r.detail.diag = [ChannelDiag::default(); NZ];
         }
-        r
     }
 }
