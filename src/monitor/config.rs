@@ -22,6 +22,10 @@ pub enum ConfigError {
     OutOfRange(&'static str),
     /// `aiding_delay_s` is negative or longer than the state history.
     AidingDelay,
+    /// This option needs a cargo feature the crate was built without
+    /// (`estimate_aiding_delay` and `estimate_heading_offset`:
+    /// `aiding-estimators`).
+    NotCompiled(&'static str),
 }
 
 impl ConfigError {
@@ -30,7 +34,7 @@ impl ConfigError {
         match self {
             Self::SigmaParams => "sigma",
             Self::TTest => "alpha",
-            Self::NonPositive(f) | Self::OutOfRange(f) => f,
+            Self::NonPositive(f) | Self::OutOfRange(f) | Self::NotCompiled(f) => f,
             Self::AidingDelay => "aiding_delay_s",
         }
     }
@@ -52,6 +56,10 @@ impl fmt::Display for ConfigError {
             Self::AidingDelay => write!(
                 f,
                 "{field}: negative, or longer than the state history (MAX_DELAY_STEPS IMU periods)"
+            ),
+            Self::NotCompiled(_) => write!(
+                f,
+                "{field}: needs the crate's `aiding-estimators` feature (on by default)"
             ),
         }
     }
@@ -387,6 +395,14 @@ impl<T: Real> UkfMonitorConfig<T> {
         ];
         if let Some(&(field, _)) = in_range.iter().find(|(_, ok)| !ok) {
             return Err(ConfigError::OutOfRange(field));
+        }
+        if !cfg!(feature = "aiding-estimators") {
+            if self.estimate_aiding_delay {
+                return Err(ConfigError::NotCompiled("estimate_aiding_delay"));
+            }
+            if self.estimate_heading_offset {
+                return Err(ConfigError::NotCompiled("estimate_heading_offset"));
+            }
         }
         Ok(())
     }

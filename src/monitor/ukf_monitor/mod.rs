@@ -385,17 +385,17 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let r = self.cfg.meas_sigma.component_mul(&self.cfg.meas_sigma);
         let meas = self.meas;
         let corrected;
-        let aiding = if self.cfg.estimate_heading_offset {
+        let aiding = if self.heading_on() {
             corrected = self.correct_heading(aiding);
             &corrected
         } else {
             aiding
         };
         let available = usable_aiding(aiding);
-        if self.cfg.estimate_heading_offset {
+        if self.heading_on() {
             self.learn_heading_offset(aiding, omega);
         }
-        if self.cfg.estimate_aiding_delay {
+        if self.delay_on() {
             self.estimate_delay(aiding, &available, omega);
         }
         // With a known latency, predict the measurement from the state of its
@@ -505,7 +505,19 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// The state history serves a configured or estimated aiding latency
     /// and the heading-offset estimate.
     fn keeps_history(&self) -> bool {
-        self.delay_steps > 0 || self.cfg.estimate_aiding_delay || self.cfg.estimate_heading_offset
+        self.delay_steps > 0 || self.delay_on() || self.heading_on()
+    }
+
+    /// The online aiding-delay estimate runs: configured, and compiled in
+    /// (feature `aiding-estimators`; without it the estimators' code is
+    /// dead and left out of the image, ≈ 9 KB of flash on the M4F).
+    fn delay_on(&self) -> bool {
+        cfg!(feature = "aiding-estimators") && self.cfg.estimate_aiding_delay
+    }
+
+    /// The heading-offset estimate runs (see [`delay_on`](Self::delay_on)).
+    fn heading_on(&self) -> bool {
+        cfg!(feature = "aiding-estimators") && self.cfg.estimate_heading_offset
     }
 
     #[inline(never)] // keeps the copy of the history off `update`'s frame
