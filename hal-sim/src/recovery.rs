@@ -196,6 +196,21 @@ fn positive_definite<const N: usize>(p: &nalgebra::SMatrix<f32, N, N>) -> bool {
     p.iter().all(|v| v.is_finite()) && p.cholesky().is_some()
 }
 
+/// The part of "back to nominal" both single-IMU monitors share:
+/// monitoring, no health flag, every channel healthy.
+fn judged_nominal(phase: Phase, health: &Health, status: &[ChannelState]) -> Option<&'static str> {
+    if phase != Phase::Monitoring {
+        return Some("not monitoring");
+    }
+    if let Some(flag) = health_flag(health) {
+        return Some(flag);
+    }
+    if !channels_healthy(status) {
+        return Some("channel not healthy");
+    }
+    None
+}
+
 fn channels_healthy(status: &[ChannelState]) -> bool {
     status.iter().all(|s| *s == ChannelState::Healthy)
 }
@@ -219,16 +234,7 @@ pub fn ukf_off_nominal<const W: usize>(
     if !positive_definite(m.filter().covariance()) {
         return Some("covariance not positive definite");
     }
-    if r.phase != Phase::Monitoring {
-        return Some("not monitoring");
-    }
-    if let Some(flag) = health_flag(&r.health) {
-        return Some(flag);
-    }
-    if !channels_healthy(&r.status) {
-        return Some("channel not healthy");
-    }
-    None
+    judged_nominal(r.phase, &r.health, &r.status)
 }
 
 /// As [`ukf_off_nominal`] for the two-stage monitor (state and fault
@@ -249,16 +255,7 @@ pub fn ots_off_nominal(r: &OtsukfReport<f32>, m: &OtsukfMonitor<f32>) -> Option<
     {
         return Some("covariance not positive definite");
     }
-    if r.phase != Phase::Monitoring {
-        return Some("not monitoring");
-    }
-    if let Some(flag) = health_flag(&r.health) {
-        return Some(flag);
-    }
-    if !channels_healthy(&r.status) {
-        return Some("channel not healthy");
-    }
-    None
+    judged_nominal(r.phase, &r.health, &r.status)
 }
 
 /// Why the parity monitor is not back to nominal: monitoring, no alarm,

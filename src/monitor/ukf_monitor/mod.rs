@@ -12,7 +12,7 @@ use crate::detect::{
     PAPER_MATRIX_AS_PRINTED, PAPER_MATRIX_CORRECTED,
 };
 use crate::filter::{ChannelDiag, Gate, Ukf, UkfError};
-use crate::math::{try_inverse, wrap_pi, Real};
+use crate::math::{try_inverse, Real};
 use crate::model::{
     discrete_process_noise_structured, ImuVec, Mat6, Measurement, MeasurementModel, ModelError,
     StateVec, VehicleModel, NX, NZ, ROLL, STATE_ANGLES,
@@ -22,6 +22,7 @@ use crate::stats::normal_upper_quantile;
 mod delay;
 mod detection;
 mod heading;
+mod history;
 mod realign;
 
 use delay::DelayEstimator;
@@ -500,41 +501,6 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         self.last_h = h;
         Ok((rejected, out.covariance_reset.is_some()))
-    }
-
-    /// The state history serves a configured or estimated aiding latency
-    /// and the heading-offset estimate.
-    fn keeps_history(&self) -> bool {
-        self.delay_steps > 0 || self.delay_on() || self.heading_on()
-    }
-
-    /// The online aiding-delay estimate runs: configured, and compiled in
-    /// (feature `aiding-estimators`; without it the estimators' code is
-    /// dead and left out of the image, ≈ 9 KB of flash on the M4F).
-    fn delay_on(&self) -> bool {
-        cfg!(feature = "aiding-estimators") && self.cfg.estimate_aiding_delay
-    }
-
-    /// The heading-offset estimate runs (see [`delay_on`](Self::delay_on)).
-    fn heading_on(&self) -> bool {
-        cfg!(feature = "aiding-estimators") && self.cfg.estimate_heading_offset
-    }
-
-    #[inline(never)] // keeps the copy of the history off `update`'s frame
-    fn shift_history(&mut self, x_prior: &StateVec<T>) {
-        let mut dx = self.ukf.state() - x_prior;
-        for v in dx.iter_mut().skip(ROLL) {
-            *v = wrap_pi(*v);
-        }
-        let mut shifted = heapless::HistoryBuf::<StateVec<T>, { MAX_DELAY_STEPS + 1 }>::new();
-        for s in self.history.oldest_ordered() {
-            let mut n = s + dx;
-            for v in n.iter_mut().skip(ROLL) {
-                *v = wrap_pi(*v);
-            }
-            shifted.write(n);
-        }
-        self.history = shifted;
     }
 
     fn advance_phase(&mut self) {

@@ -1,0 +1,45 @@
+//! The state history of the UKF monitor: one state per IMU period, kept
+//! when aiding is fused at its own (configured or estimated) latency or the
+//! heading offset is estimated, and shifted by every correction so that it
+//! stays IMU propagation alone between any two of its states.
+
+use super::{UkfMonitor, MAX_DELAY_STEPS};
+use crate::math::{wrap_pi, Real};
+use crate::model::{StateVec, ROLL};
+
+impl<T: Real, const W: usize> UkfMonitor<T, W> {
+    /// The state history serves a configured or estimated aiding latency
+    /// and the heading-offset estimate.
+    pub(super) fn keeps_history(&self) -> bool {
+        self.delay_steps > 0 || self.delay_on() || self.heading_on()
+    }
+
+    /// The online aiding-delay estimate runs: configured, and compiled in
+    /// (feature `aiding-estimators`; without it the estimators' code is
+    /// dead and left out of the image, ≈ 9 KB of flash on the M4F).
+    pub(super) fn delay_on(&self) -> bool {
+        cfg!(feature = "aiding-estimators") && self.cfg.estimate_aiding_delay
+    }
+
+    /// The heading-offset estimate runs (see [`delay_on`](Self::delay_on)).
+    pub(super) fn heading_on(&self) -> bool {
+        cfg!(feature = "aiding-estimators") && self.cfg.estimate_heading_offset
+    }
+
+    #[inline(never)] // keeps the copy of the history off `update`'s frame
+    pub(super) fn shift_history(&mut self, x_prior: &StateVec<T>) {
+        let mut dx = self.ukf.state() - x_prior;
+        for v in dx.iter_mut().skip(ROLL) {
+            *v = wrap_pi(*v);
+        }
+        let mut shifted = heapless::HistoryBuf::<StateVec<T>, { MAX_DELAY_STEPS + 1 }>::new();
+        for s in self.history.oldest_ordered() {
+            let mut n = s + dx;
+            for v in n.iter_mut().skip(ROLL) {
+                *v = wrap_pi(*v);
+            }
+            shifted.write(n);
+        }
+        self.history = shifted;
+    }
+}
