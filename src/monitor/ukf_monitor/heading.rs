@@ -28,10 +28,26 @@
 //! applied and learning ends as usual). Needs the aiding's
 //! velocity in NED (GNSS, M2); with body-frame DVL velocity (M1) the
 //! heading does not enter the velocity and nothing is learnt.
+//!
+//! **What the offset can hide.** A heading error `δψ` rotates the
+//! propagated horizontal specific force, so the velocity innovations carry
+//! `δψ·|a_h|`, an accelerometer-fault look-alike, while the vehicle
+//! accelerates horizontally (a 25° banked turn: 4.6 m/s², i.e. 0.24 m/s² per
+//! 3°). The estimator keeps a bound `u` on the offset still unresolved: the
+//! learnt range ±[`HEADING_OFFSET_MAX_DEG`] until the data say more, then
+//! `|ê| + 3·se` of the latest least-squares residual. While monitoring, an
+//! aiding epoch whose IMU-propagated horizontal acceleration gives
+//! `u·|a_h| > ½·min_fault` (of the horizontal accelerometers) cannot be
+//! judged for the accelerometers: their windows are emptied for that epoch
+//! and [`HEADING_HOLD_S`] after it, so they report `NotMonitored` (the
+//! windows must refill) instead of a verdict the offset may have made. The
+//! gyros stay monitored (a constant heading offset is not a rate); an offset
+//! step applied while monitoring empties every window once, since the yaw
+//! aiding then jumps. Once `u` is small, turns are judged as usual.
 
 use super::{UkfMonitor, MAX_DELAY_STEPS};
 use crate::math::{wrap_pi, Real};
-use crate::model::{AidingKind, MeasVec, Measurement, YAW};
+use crate::model::{AidingKind, MeasVec, Measurement, StateVec, YAW};
 use crate::monitor::{ChannelState, Phase};
 
 /// Aiding epochs per block (2 s at 10 Hz).
@@ -48,6 +64,14 @@ const HEADING_MAX_SE_DEG: f64 = 0.5;
 /// follows a changed aiding over a few seconds, and the next blocks measure
 /// what is left.
 const HEADING_GAIN: f64 = 0.5;
+/// Fraction of the accelerometers' `min_fault` the heading contamination
+/// `u·|a_h|` may reach and the accelerometers still be judged: half the
+/// smallest fault cannot by itself make a fault-sized estimate.
+const HEADING_CONTAMINATION_FRACTION: f64 = 0.5;
+/// After a contaminated epoch the accelerometers stay unjudged this long,
+/// s: the velocity error the heading error built up during the manoeuvre is
+/// corrected by the GNSS velocity over the filter's ≈ 1–2 s time constant.
+pub(super) const HEADING_HOLD_S: f64 = 2.0;
 
 /// Block sums of the horizontal velocity changes and the least-squares
 /// sums over blocks.
@@ -55,6 +79,10 @@ const HEADING_GAIN: f64 = 0.5;
 pub(super) struct HeadingEstimator<T> {
     /// Learnt offset, rad.
     pub(super) offset: T,
+    /// Bound on the offset not yet resolved, rad (module docs).
+    pub(super) uncertainty: T,
+    /// Time left during which the accelerometers are not judged, s.
+    pub(super) hold_s: T,
     /// Previous horizontal GNSS velocity and IMU periods since it.
     prev: Option<([T; 2], usize)>,
     block_z: [T; 2],
@@ -72,6 +100,8 @@ impl<T: Real> HeadingEstimator<T> {
     pub(super) fn new() -> Self {
         Self {
             offset: T::zero(),
+            uncertainty: T::lit(HEADING_OFFSET_MAX_DEG.to_radians()),
+            hold_s: T::zero(),
             prev: None,
             block_z: [T::zero(); 2],
             block_h: [T::zero(); 2],
@@ -84,8 +114,9 @@ impl<T: Real> HeadingEstimator<T> {
         }
     }
 
-    /// One IMU period passed.
-    pub(super) fn tick(&mut self) {
+    /// One IMU period of `dt` s passed.
+    pub(super) fn tick(&mut self, dt: T) {
+        self.hold_s = (self.hold_s - dt).max(T::zero());
         if let Some((_, age)) = self.prev.as_mut() {
             *age = age.saturating_add(1);
         }
@@ -116,13 +147,14 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.heading.offset
     }
 
-    /// Before an update: one epoch of horizontal velocity changes.
+    /// Before an update: one epoch of horizontal velocity changes. Returns
+    /// true when an offset step was applied (the yaw aiding jumps by it).
     #[inline(never)] // own stack frame and one copy (issue 17)
     pub(super) fn learn_heading_offset(
         &mut self,
         aiding: &Measurement<T>,
         omega: &nalgebra::Vector3<T>,
-    ) {
+    ) -> bool {
         let flagged = self
             .report
             .status
@@ -132,20 +164,20 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let has_vel = aiding.available.iter().take(2).all(|a| *a);
         if flagged || !learning || self.cfg.aiding != AidingKind::GnssAttitude {
             self.heading.interrupt();
-            return;
+            return false;
         }
         if !has_vel {
-            return;
+            return false;
         }
         let z = [aiding.z.x, aiding.z.y];
         let prev = self.heading.prev.replace((z, 0));
-        let Some((z0, age)) = prev else { return };
+        let Some((z0, age)) = prev else { return false };
         // The history's states at the fusion lag and one aiding interval
         // before it (newest first).
         let lag = self.delay_steps;
-        if lag + age > MAX_DELAY_STEPS {
+        if lag + age > MAX_DELAY_STEPS || age == 0 {
             self.heading.interrupt();
-            return;
+            return false;
         }
         let mut now = None;
         let mut then = None;
@@ -159,20 +191,30 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         let (Some(now), Some(then)) = (now, then) else {
             self.heading.interrupt();
-            return;
+            return false;
         };
         let (a, b): (MeasVec<T>, MeasVec<T>) = (
             self.meas.predict(&now, omega),
             self.meas.predict(&then, omega),
         );
+        // What the unresolved offset can put into the velocity innovations
+        // over this epoch (module docs), against half the smallest
+        // horizontal accelerometer fault.
+        let span = T::lit(age as f64) * self.cfg.imu_period;
+        let (an, ae) = ((a.x - b.x) / span, (a.y - b.y) / span);
+        let a_h = (an * an + ae * ae).sqrt_fast();
+        let smallest = self.cfg.min_fault.x.min(self.cfg.min_fault.y);
         let h = &mut self.heading;
+        if h.uncertainty * a_h > smallest * T::lit(HEADING_CONTAMINATION_FRACTION) {
+            h.hold_s = T::lit(HEADING_HOLD_S);
+        }
         h.block_z[0] += z[0] - z0[0];
         h.block_z[1] += z[1] - z0[1];
         h.block_h[0] += a.x - b.x;
         h.block_h[1] += a.y - b.y;
         h.block_epochs += 1;
         if h.block_epochs < HEADING_BLOCK_EPOCHS {
-            return;
+            return false;
         }
         let [hn, he] = h.block_h;
         let [zn, ze] = h.block_z;
@@ -191,23 +233,86 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let cross = h.cross - (sh_n * sz_e - sh_e * sz_n) / h.n;
         let dot = h.dot - (sh_n * sh_n + sh_e * sh_e) / h.n;
         if h.n < T::lit(2.0) || dot <= T::zero() {
-            return;
+            return false;
         }
         let e = -cross / dot;
         let sigma = self.cfg.meas_sigma.x.max(self.cfg.meas_sigma.y);
         let se = sigma * T::lit(core::f64::consts::SQRT_2) / dot.sqrt_fast();
-        if e.abs() > T::lit(HEADING_SIGNIFICANCE) * se
-            && se < T::lit(HEADING_MAX_SE_DEG.to_radians())
-        {
-            let max = T::lit(HEADING_OFFSET_MAX_DEG.to_radians());
+        let max = T::lit(HEADING_OFFSET_MAX_DEG.to_radians());
+        let significance = T::lit(HEADING_SIGNIFICANCE);
+        // Only a precise residual narrows the bound: with few manoeuvres
+        // `e` and `se` are dominated by the filter's own transients.
+        if se < T::lit(HEADING_MAX_SE_DEG.to_radians()) {
+            h.uncertainty = (e.abs() + significance * se).min(max);
+        }
+        if e.abs() > significance * se && se < T::lit(HEADING_MAX_SE_DEG.to_radians()) {
+            let before = h.offset;
             h.offset = (h.offset + e * T::lit(HEADING_GAIN)).max(-max).min(max);
+            let turn = h.offset - before;
+            // What the applied half leaves, plus the residual's own error.
+            h.uncertainty = (e.abs() * T::lit(1.0 - HEADING_GAIN) + significance * se).min(max);
             h.n = T::zero();
             h.sum_h = [T::zero(); 2];
             h.sum_z = [T::zero(); 2];
             h.cross = T::zero();
             h.dot = T::zero();
+            self.turn_heading(turn);
             // Learning started against the old offset: start it again.
             self.restart_learning();
+            return true;
+        }
+        false
+    }
+}
+
+impl<T: Real, const W: usize> UkfMonitor<T, W> {
+    /// The offset grew by `turn`: the corrected yaw aiding moves by `−turn`
+    /// from now on, and so do the filter's heading and its history, at
+    /// unchanged NED velocity (the body velocity turns with the heading).
+    /// Without this the filter followed the jump over seconds and its yaw
+    /// innovations looked like a yaw-rate fault (measured: flags on r at
+    /// each applied step).
+    fn turn_heading(&mut self, turn: T) {
+        if self.cfg.aiding != AidingKind::GnssAttitude {
+            return;
+        }
+        let meas = self.meas;
+        let zero = nalgebra::Vector3::zeros();
+        let turned = |x: &StateVec<T>| {
+            let v = meas.predict(x, &zero);
+            let mut n = *x;
+            if let Some(y) = n.get_mut(YAW) {
+                *y = wrap_pi(*y - turn);
+            }
+            let vb = meas.velocity_to_body(&n, &nalgebra::Vector3::new(v.x, v.y, v.z));
+            n.x = vb.x;
+            n.y = vb.y;
+            n.z = vb.z;
+            n
+        };
+        let x = turned(self.ukf.state());
+        let p = *self.ukf.covariance();
+        self.ukf.reset(x, p);
+        let mut shifted = heapless::HistoryBuf::<StateVec<T>, { MAX_DELAY_STEPS + 1 }>::new();
+        for s in self.history.oldest_ordered() {
+            shifted.write(turned(s));
+        }
+        self.history = shifted;
+    }
+
+    /// While monitoring, after this epoch's samples were pushed: empties the
+    /// windows the heading offset may have contaminated (module docs), so
+    /// those channels report `NotMonitored` until they refill.
+    pub(super) fn hide_heading_contamination(&mut self, offset_stepped: bool) {
+        let n = if offset_stepped {
+            self.windows.len()
+        } else if self.heading.hold_s > T::zero() {
+            3
+        } else {
+            0
+        };
+        for w in self.windows.iter_mut().take(n) {
+            w.clear();
         }
     }
 }
