@@ -28,22 +28,6 @@
 //! applied and learning ends as usual). Needs the aiding's
 //! velocity in NED (GNSS, M2); with body-frame DVL velocity (M1) the
 //! heading does not enter the velocity and nothing is learnt.
-//!
-//! **What the offset can hide.** A heading error `δψ` rotates the
-//! propagated horizontal specific force, so the velocity innovations carry
-//! `δψ·|a_h|`, an accelerometer-fault look-alike, while the vehicle
-//! accelerates horizontally (a 25° banked turn: 4.6 m/s², i.e. 0.24 m/s² per
-//! 3°). The estimator keeps a bound `u` on the offset still unresolved: the
-//! learnt range ±[`HEADING_OFFSET_MAX_DEG`] until the data say more, then
-//! `|ê| + 3·se` of the latest least-squares residual. While monitoring, an
-//! aiding epoch whose IMU-propagated horizontal acceleration gives
-//! `u·|a_h| > ½·min_fault` (of the horizontal accelerometers) cannot be
-//! judged for the accelerometers: their windows are emptied for that epoch
-//! and [`HEADING_HOLD_S`] after it, so they report `NotMonitored` (the
-//! windows must refill) instead of a verdict the offset may have made. The
-//! gyros stay monitored (a constant heading offset is not a rate); an offset
-//! step applied while monitoring empties every window once, since the yaw
-//! aiding then jumps. Once `u` is small, turns are judged as usual.
 
 use super::{UkfMonitor, MAX_DELAY_STEPS};
 use crate::math::{wrap_pi, Real};
@@ -64,14 +48,6 @@ const HEADING_MAX_SE_DEG: f64 = 0.5;
 /// follows a changed aiding over a few seconds, and the next blocks measure
 /// what is left.
 const HEADING_GAIN: f64 = 0.5;
-/// Fraction of the accelerometers' `min_fault` the heading contamination
-/// `u·|a_h|` may reach and the accelerometers still be judged: half the
-/// smallest fault cannot by itself make a fault-sized estimate.
-const HEADING_CONTAMINATION_FRACTION: f64 = 0.5;
-/// After a contaminated epoch the accelerometers stay unjudged this long,
-/// s: the velocity error the heading error built up during the manoeuvre is
-/// corrected by the GNSS velocity over the filter's ≈ 1–2 s time constant.
-pub(super) const HEADING_HOLD_S: f64 = 2.0;
 
 /// Block sums of the horizontal velocity changes and the least-squares
 /// sums over blocks.
@@ -79,10 +55,6 @@ pub(super) const HEADING_HOLD_S: f64 = 2.0;
 pub(super) struct HeadingEstimator<T> {
     /// Learnt offset, rad.
     pub(super) offset: T,
-    /// Bound on the offset not yet resolved, rad (module docs).
-    pub(super) uncertainty: T,
-    /// Time left during which the accelerometers are not judged, s.
-    pub(super) hold_s: T,
     /// Previous horizontal GNSS velocity and IMU periods since it.
     prev: Option<([T; 2], usize)>,
     block_z: [T; 2],
@@ -100,8 +72,6 @@ impl<T: Real> HeadingEstimator<T> {
     pub(super) fn new() -> Self {
         Self {
             offset: T::zero(),
-            uncertainty: T::lit(HEADING_OFFSET_MAX_DEG.to_radians()),
-            hold_s: T::zero(),
             prev: None,
             block_z: [T::zero(); 2],
             block_h: [T::zero(); 2],
@@ -114,9 +84,8 @@ impl<T: Real> HeadingEstimator<T> {
         }
     }
 
-    /// One IMU period of `dt` s passed.
-    pub(super) fn tick(&mut self, dt: T) {
-        self.hold_s = (self.hold_s - dt).max(T::zero());
+    /// One IMU period passed.
+    pub(super) fn tick(&mut self) {
         if let Some((_, age)) = self.prev.as_mut() {
             *age = age.saturating_add(1);
         }
@@ -147,14 +116,14 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.heading.offset
     }
 
-    /// Before an update: one epoch of horizontal velocity changes. Returns
-    /// true when an offset step was applied (the yaw aiding jumps by it).
+    /// Before an update: one epoch of horizontal velocity changes; a
+    /// significant residual turns the offset and the filter's heading.
     #[inline(never)] // own stack frame and one copy (issue 17)
     pub(super) fn learn_heading_offset(
         &mut self,
         aiding: &Measurement<T>,
         omega: &nalgebra::Vector3<T>,
-    ) -> bool {
+    ) {
         let flagged = self
             .report
             .status
@@ -164,20 +133,20 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let has_vel = aiding.available.iter().take(2).all(|a| *a);
         if flagged || !learning || self.cfg.aiding != AidingKind::GnssAttitude {
             self.heading.interrupt();
-            return false;
+            return;
         }
         if !has_vel {
-            return false;
+            return;
         }
         let z = [aiding.z.x, aiding.z.y];
         let prev = self.heading.prev.replace((z, 0));
-        let Some((z0, age)) = prev else { return false };
+        let Some((z0, age)) = prev else { return };
         // The history's states at the fusion lag and one aiding interval
         // before it (newest first).
         let lag = self.delay_steps;
-        if lag + age > MAX_DELAY_STEPS || age == 0 {
+        if lag + age > MAX_DELAY_STEPS {
             self.heading.interrupt();
-            return false;
+            return;
         }
         let mut now = None;
         let mut then = None;
@@ -191,30 +160,20 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         let (Some(now), Some(then)) = (now, then) else {
             self.heading.interrupt();
-            return false;
+            return;
         };
         let (a, b): (MeasVec<T>, MeasVec<T>) = (
             self.meas.predict(&now, omega),
             self.meas.predict(&then, omega),
         );
-        // What the unresolved offset can put into the velocity innovations
-        // over this epoch (module docs), against half the smallest
-        // horizontal accelerometer fault.
-        let span = T::lit(age as f64) * self.cfg.imu_period;
-        let (an, ae) = ((a.x - b.x) / span, (a.y - b.y) / span);
-        let a_h = (an * an + ae * ae).sqrt_fast();
-        let smallest = self.cfg.min_fault.x.min(self.cfg.min_fault.y);
         let h = &mut self.heading;
-        if h.uncertainty * a_h > smallest * T::lit(HEADING_CONTAMINATION_FRACTION) {
-            h.hold_s = T::lit(HEADING_HOLD_S);
-        }
         h.block_z[0] += z[0] - z0[0];
         h.block_z[1] += z[1] - z0[1];
         h.block_h[0] += a.x - b.x;
         h.block_h[1] += a.y - b.y;
         h.block_epochs += 1;
         if h.block_epochs < HEADING_BLOCK_EPOCHS {
-            return false;
+            return;
         }
         let [hn, he] = h.block_h;
         let [zn, ze] = h.block_z;
@@ -233,24 +192,17 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let cross = h.cross - (sh_n * sz_e - sh_e * sz_n) / h.n;
         let dot = h.dot - (sh_n * sh_n + sh_e * sh_e) / h.n;
         if h.n < T::lit(2.0) || dot <= T::zero() {
-            return false;
+            return;
         }
         let e = -cross / dot;
         let sigma = self.cfg.meas_sigma.x.max(self.cfg.meas_sigma.y);
         let se = sigma * T::lit(core::f64::consts::SQRT_2) / dot.sqrt_fast();
         let max = T::lit(HEADING_OFFSET_MAX_DEG.to_radians());
         let significance = T::lit(HEADING_SIGNIFICANCE);
-        // Only a precise residual narrows the bound: with few manoeuvres
-        // `e` and `se` are dominated by the filter's own transients.
-        if se < T::lit(HEADING_MAX_SE_DEG.to_radians()) {
-            h.uncertainty = (e.abs() + significance * se).min(max);
-        }
         if e.abs() > significance * se && se < T::lit(HEADING_MAX_SE_DEG.to_radians()) {
             let before = h.offset;
             h.offset = (h.offset + e * T::lit(HEADING_GAIN)).max(-max).min(max);
             let turn = h.offset - before;
-            // What the applied half leaves, plus the residual's own error.
-            h.uncertainty = (e.abs() * T::lit(1.0 - HEADING_GAIN) + significance * se).min(max);
             h.n = T::zero();
             h.sum_h = [T::zero(); 2];
             h.sum_z = [T::zero(); 2];
@@ -259,9 +211,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             self.turn_heading(turn);
             // Learning started against the old offset: start it again.
             self.restart_learning();
-            return true;
         }
-        false
     }
 }
 
@@ -298,21 +248,5 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             shifted.write(turned(s));
         }
         self.history = shifted;
-    }
-
-    /// While monitoring, after this epoch's samples were pushed: empties the
-    /// windows the heading offset may have contaminated (module docs), so
-    /// those channels report `NotMonitored` until they refill.
-    pub(super) fn hide_heading_contamination(&mut self, offset_stepped: bool) {
-        let n = if offset_stepped {
-            self.windows.len()
-        } else if self.heading.hold_s > T::zero() {
-            3
-        } else {
-            0
-        };
-        for w in self.windows.iter_mut().take(n) {
-            w.clear();
-        }
     }
 }

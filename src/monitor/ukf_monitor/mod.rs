@@ -370,7 +370,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         if self.keeps_history() {
             self.history.write(*self.ukf.state());
             self.delay_estimator.tick();
-            self.heading.tick(dt);
+            self.heading.tick();
         }
         Ok(reset)
     }
@@ -383,7 +383,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     ) -> Result<(bool, bool), UkfError<ModelError>> {
         // An offset step first turns the filter's heading with the aiding
         // (`heading.rs`), so the step itself is no innovation.
-        let offset_stepped = self.heading_on() && self.learn_heading_offset(aiding, omega);
+        if self.heading_on() {
+            self.learn_heading_offset(aiding, omega);
+        }
         let x_prior = *self.ukf.state();
         let h = self.meas.jacobian(&x_prior, omega);
         let r = self.cfg.meas_sigma.component_mul(&self.cfg.meas_sigma);
@@ -490,9 +492,6 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                     w.push(v);
                 }
             }
-        }
-        if self.heading_on() && self.phase == Phase::Monitoring {
-            self.hide_heading_contamination(offset_stepped);
         }
         self.report.detail.diag = out.diag;
         // (I − K H) X = X − K (H X), with H X already at hand.
