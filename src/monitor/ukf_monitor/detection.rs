@@ -41,7 +41,14 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         match self.phase {
             Phase::Learning => {
                 self.learn_inflation();
-                if let Some(f) = if held { None } else { instant(self) } {
+                if let Some(mut f) = if held { None } else { instant(self) } {
+                    // Not the accelerometers' from an epoch an unresolved
+                    // heading offset may have contaminated (`heading.rs`).
+                    if self.heading_on() && self.heading.contaminated {
+                        for v in f.iter_mut().take(2) {
+                            *v = T::zero();
+                        }
+                    }
                     let k = (dt_learn / self.cfg.learn_tau_s).min(T::one());
                     self.nominal_bias += f * k;
                 }
@@ -57,7 +64,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                     .iter()
                     .all(|t| t.abs() < self.t_threshold() * T::lit(0.5));
                 let estimate = if quiet && !held { instant(self) } else { None };
-                if let Some(f) = estimate {
+                if let Some(mut f) = estimate {
+                    if self.heading_on() && self.heading.contaminated {
+                        for v in f.iter_mut().take(2) {
+                            *v = T::zero();
+                        }
+                    }
                     let k = dt_learn / self.cfg.drift_tau_s;
                     for ((b, df), lim) in self
                         .nominal_bias

@@ -28,6 +28,21 @@
 //! applied and learning ends as usual). Needs the aiding's
 //! velocity in NED (GNSS, M2); with body-frame DVL velocity (M1) the
 //! heading does not enter the velocity and nothing is learnt.
+//!
+//! **What the unresolved offset contaminates.** A heading error `δψ` turns
+//! the propagated horizontal specific force, so while the vehicle
+//! accelerates horizontally the velocity innovations carry about `δψ·|a_h|`,
+//! which the nominal-bias learner would take for an accelerometer bias (a
+//! 25° banked turn: 4.6 m/s², 0.24 m/s² per 3°; measured: 0.14 m/s² learnt
+//! on a_x for a true 0.01, then a_x flagged for the rest of the hour). The
+//! estimator keeps a bound `u` on the offset still unresolved: the learnt
+//! range ±[`HEADING_OFFSET_MAX_DEG`] until a block evaluation is precise
+//! (standard error below [`HEADING_MAX_SE_DEG`]), then `|ê| + 3·se` of its
+//! residual (after an applied step, what the step leaves of it). An aiding
+//! epoch whose IMU-propagated horizontal acceleration gives
+//! `u·|a_h| > ½·min_fault` (smaller horizontal accelerometer) is marked
+//! contaminated, and the accelerometers' nominal biases are not learnt from
+//! it (the gyros' are).
 
 use super::{UkfMonitor, MAX_DELAY_STEPS};
 use crate::math::{wrap_pi, Real};
@@ -48,6 +63,10 @@ const HEADING_MAX_SE_DEG: f64 = 0.5;
 /// follows a changed aiding over a few seconds, and the next blocks measure
 /// what is left.
 const HEADING_GAIN: f64 = 0.5;
+/// Fraction of the accelerometers' `min_fault` the contamination `u·|a_h|`
+/// may reach in an epoch the accelerometer biases are learnt from: half the
+/// smallest fault the monitor reports.
+const HEADING_CONTAMINATION_FRACTION: f64 = 0.5;
 
 /// Block sums of the horizontal velocity changes and the least-squares
 /// sums over blocks.
@@ -55,6 +74,11 @@ const HEADING_GAIN: f64 = 0.5;
 pub(super) struct HeadingEstimator<T> {
     /// Learnt offset, rad.
     pub(super) offset: T,
+    /// Bound on the offset not yet resolved, rad (module docs).
+    uncertainty: T,
+    /// The velocity innovations of this epoch may carry the unresolved
+    /// offset (module docs).
+    pub(super) contaminated: bool,
     /// Previous horizontal GNSS velocity and IMU periods since it.
     prev: Option<([T; 2], usize)>,
     block_z: [T; 2],
@@ -72,6 +96,8 @@ impl<T: Real> HeadingEstimator<T> {
     pub(super) fn new() -> Self {
         Self {
             offset: T::zero(),
+            uncertainty: T::lit(HEADING_OFFSET_MAX_DEG.to_radians()),
+            contaminated: false,
             prev: None,
             block_z: [T::zero(); 2],
             block_h: [T::zero(); 2],
@@ -92,6 +118,7 @@ impl<T: Real> HeadingEstimator<T> {
     }
 
     fn interrupt(&mut self) {
+        self.contaminated = false;
         self.prev = None;
         self.block_z = [T::zero(); 2];
         self.block_h = [T::zero(); 2];
@@ -166,7 +193,15 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             self.meas.predict(&now, omega),
             self.meas.predict(&then, omega),
         );
+        // What the unresolved offset can put into this epoch's velocity
+        // innovations, against half the smallest horizontal accelerometer
+        // fault (module docs). `age ≥ 1`: the history advanced since `z0`.
+        let span = T::lit(age.max(1) as f64) * self.cfg.imu_period;
+        let (an, ae) = ((a.x - b.x) / span, (a.y - b.y) / span);
+        let a_h = (an * an + ae * ae).sqrt_fast();
+        let smallest = self.cfg.min_fault.x.min(self.cfg.min_fault.y);
         let h = &mut self.heading;
+        h.contaminated = h.uncertainty * a_h > smallest * T::lit(HEADING_CONTAMINATION_FRACTION);
         h.block_z[0] += z[0] - z0[0];
         h.block_z[1] += z[1] - z0[1];
         h.block_h[0] += a.x - b.x;
@@ -199,10 +234,15 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let se = sigma * T::lit(core::f64::consts::SQRT_2) / dot.sqrt_fast();
         let max = T::lit(HEADING_OFFSET_MAX_DEG.to_radians());
         let significance = T::lit(HEADING_SIGNIFICANCE);
-        if e.abs() > significance * se && se < T::lit(HEADING_MAX_SE_DEG.to_radians()) {
+        let precise = se < T::lit(HEADING_MAX_SE_DEG.to_radians());
+        if precise {
+            h.uncertainty = (e.abs() + significance * se).min(max);
+        }
+        if e.abs() > significance * se && precise {
             let before = h.offset;
             h.offset = (h.offset + e * T::lit(HEADING_GAIN)).max(-max).min(max);
             let turn = h.offset - before;
+            h.uncertainty = (e.abs() * T::lit(1.0 - HEADING_GAIN) + significance * se).min(max);
             h.n = T::zero();
             h.sum_h = [T::zero(); 2];
             h.sum_z = [T::zero(); 2];

@@ -277,7 +277,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 Err(ModelError::PitchSingularity) => health.pitch_singular = true,
                 Err(ModelError::NonFinite) => health.input_invalid = true,
             }
-            self.phase_time += dt;
+            // The learning phase counts only epochs an unresolved heading
+            // offset cannot have contaminated (`heading.rs`), so that the
+            // accelerometer biases are learnt for `learn_s` of them.
+            if !(self.phase == Phase::Learning && self.heading_on() && self.heading.contaminated) {
+                self.phase_time += dt;
+            }
             self.last_dt = dt;
         }
 
