@@ -5,7 +5,8 @@
 //! steps within about a second, and no flag is raised once a fault has
 //! cleared and 5 s have passed; fault-free hours raise none either. The
 //! same with the aiding 0.2 s late and the latency estimated online, and
-//! with a 3° heading offset learnt (not yet to the target).
+//! with a 3° heading offset learnt (fault-free hours to the target,
+//! the time after faults clear not yet).
 //! CI runs 2 seeds; the ignored tests run 20 (+ 20 held out) and 10 h
 //! (`cargo test --release --test aircraft_episodes -- --ignored --nocapture`,
 //! about a minute; the figures are in docs/results.md).
@@ -276,61 +277,111 @@ fn heading_offset_steps_raise_no_yaw_rate_flag() {
     }
 }
 
-/// A 3° heading offset between the attitude aiding and the IMU frame:
-/// ignored it raises hundreds of false alarms per hour; learnt from the
-/// GNSS velocity (`estimate_heading_offset`) fewer, but not the issue's
-/// ≤ 1 per hour: on the held-out seeds 300–309 a few runs flag a_x for much
-/// of the hour (open, docs/results.md). Asserted as measured bounds so that
-/// a change shows; seeds 200–201 and 100–104 were looked at while designing,
-/// 300–309 and 500–519 were not.
+/// GIVEN a 3° heading offset learnt online and a run whose first seconds
+/// are a turn, WHEN the monitor learns its nominal biases, THEN it does not
+/// learn the horizontal accelerometers' from the turn (the unresolved offset
+/// is in those innovations) and raises no false alarm in 5 min. Before,
+/// seed 304 learnt a_x 0.23 m/s² off and raised 16 events in 5 min, seed
+/// 308 0.13 m/s² off and 34 (`aircraft_heading_offset` runs 30 h).
 #[test]
-#[ignore = "12 h and 45 seeds of episodes: run with --release -- --ignored"]
+fn heading_offset_turns_are_not_learnt_as_accelerometer_bias() {
+    let mut scn = Scenario::aircraft_fault_free(300.0);
+    scn.aiding.heading_offset_rad = 3f64.to_radians();
+    for seed in [304, 308] {
+        let trace = run_with::<f32>(&scn, seed, config(&scn, Setup::EstimateHeading)).unwrap();
+        let m = evaluate(&trace);
+        let last = trace.rows.last().unwrap();
+        let err = (last.nominal_bias[0] - last.true_bias[0]).abs();
+        println!(
+            "seed {seed}: {} false-alarm events in {:.0} s, a_x nominal bias error {err:.3} m/s²",
+            m.false_alarm_events, m.free_time_s
+        );
+        assert_eq!(m.false_alarm_events, 0);
+        assert!(err < 0.05, "a_x bias error {err}");
+    }
+}
+
+/// Episodes for the heading-offset estimate: the first onset at 60 s. With
+/// the estimate on, the learning phase counts only epochs an unresolved
+/// offset cannot have contaminated, so it ends later (measured: monitoring
+/// from 12.5–53 s on seeds 500–519) and a fault starting before that is a
+/// power-up fault, absorbed up to `max_nominal_bias` (docs/results.md).
+fn heading_plan() -> EpisodePlan {
+    EpisodePlan {
+        first_onset_s: 60.0,
+        ..EpisodePlan::default()
+    }
+}
+
+fn heading_episodes(base: &Scenario, seeds: std::ops::Range<u64>) -> EpisodeTotals {
+    let plan = heading_plan();
+    let mut all = Vec::new();
+    for seed in seeds {
+        let scn = episode_scenario(base, seed, &plan);
+        let trace = run_with::<f32>(&scn, seed, config(&scn, Setup::EstimateHeading)).unwrap();
+        all.extend(score(&trace, &plan));
+    }
+    EpisodeTotals::of(&all)
+}
+
+/// A 3° heading offset between the attitude aiding and the IMU frame,
+/// learnt from the GNSS velocity (`estimate_heading_offset`): fault-free
+/// hours meet the issue's ≤ 1 false-alarm event per hour; after faults
+/// clear they do not yet (≈ 20 events per hour, open, docs/results.md).
+/// Seeds 200–201 and 100–104 were looked at while designing, 300–309 and
+/// 500–519 while diagnosing; 400–409 and 600–619 were not looked at.
+#[test]
+#[ignore = "22 h and 65 seeds of episodes: run with --release -- --ignored"]
 fn aircraft_heading_offset() {
     let mut offset = Scenario::aircraft_fault_free(0.0);
     offset.aiding.heading_offset_rad = 3f64.to_radians();
     let mut hour = offset.clone();
     hour.duration_s = 3600.0;
     let ignored = fault_free(&hour, 200..202);
-    let learnt = fault_free_with(&hour, 200..202, Setup::EstimateHeading);
-    let held_out = fault_free_with(&hour, 300..310, Setup::EstimateHeading);
-    for (name, m) in [
-        ("ignored, seeds 200-201", &ignored),
-        ("estimated, seeds 200-201", &learnt),
-        ("estimated, held-out seeds 300-309", &held_out),
+    println!(
+        "aircraft, 3° heading offset, ignored, seeds 200-201: {} false-alarm events in {:.2} fault-free h",
+        ignored.false_alarm_events,
+        ignored.free_time_s / 3600.0
+    );
+    assert!(ignored.false_alarm_events > 100);
+    for (name, seeds) in [
+        ("seeds 200-201", 200..202),
+        ("seeds 300-309", 300..310),
+        ("held-out seeds 400-409", 400..410),
     ] {
+        let m = fault_free_with(&hour, seeds, Setup::EstimateHeading);
+        let h = m.free_time_s / 3600.0;
         println!(
-            "aircraft, 3° heading offset, {name}: {} false-alarm events in {:.2} fault-free h",
-            m.false_alarm_events,
-            m.free_time_s / 3600.0
+            "aircraft, 3° heading offset, estimated, {name}: {} false-alarm events in {h:.2} fault-free h",
+            m.false_alarm_events
+        );
+        assert!(m.false_alarm_events as f64 <= h, "{name}");
+    }
+    for (name, seeds) in [
+        ("seeds 100-104", 100..105),
+        ("seeds 500-519", 500..520),
+        ("held-out seeds 600-619", 600..620),
+    ] {
+        let t = heading_episodes(&offset, seeds);
+        println!(
+            "aircraft, 3° heading offset, estimated, first onset 60 s, {name}: {}",
+            t.line()
+        );
+        assert!(t.detected as f64 >= 0.99 * t.episodes as f64, "{name}");
+        // Measured 20 in 1.03 h on 500-519 (71 before the learning took
+        // only uncontaminated epochs): a bound so that a change shows.
+        assert!(
+            t.post_clear_events as f64 <= 30.0 * t.post_clear_s / 3600.0,
+            "{name}"
         );
     }
-    assert!(ignored.false_alarm_events > 100);
-    assert!(learnt.false_alarm_events <= 2);
-    // Measured 785 (952 before the filter's heading turned with the
-    // offset steps).
-    assert!(held_out.false_alarm_events <= 850);
-    let t = episodes_with(&offset, 500..520, Setup::EstimateHeading);
+    // Learning the offset costs no detection where there is none (step
+    // delay median 1.11 s here, 1.04 s with the default plan: not asserted).
+    let t = heading_episodes(&Scenario::aircraft_fault_free(0.0), 100..105);
     println!(
-        "aircraft, 3° heading offset, estimated, held-out seeds 500-519: {}",
+        "aircraft, no offset, estimated, first onset 60 s, seeds 100-104: {}",
         t.line()
     );
-    assert!(t.detected as f64 >= 0.99 * t.episodes as f64);
-    let t = episodes(&offset, 100..105);
-    println!(
-        "aircraft, 3° heading offset, ignored, seeds 100-104: {}",
-        t.line()
-    );
-    let t = episodes_with(&offset, 100..105, Setup::EstimateHeading);
-    println!(
-        "aircraft, 3° heading offset, estimated, seeds 100-104: {}",
-        t.line()
-    );
-    assert!(t.detected as f64 >= 0.95 * t.episodes as f64);
-    // Learning the offset costs nothing where there is none.
-    let t = episodes_with(
-        &Scenario::aircraft_fault_free(0.0),
-        100..105,
-        Setup::EstimateHeading,
-    );
-    assert_targets("aircraft, no offset, estimated, seeds 100-104", &t);
+    assert_eq!(t.detected, t.episodes);
+    assert_eq!(t.post_clear_events, 0);
 }
