@@ -183,9 +183,12 @@ pub struct UkfMonitorConfig<T> {
     /// [`UkfMonitor::aiding_delay_estimate`](super::UkfMonitor::aiding_delay_estimate).
     pub estimate_aiding_delay: bool,
     /// Learn a constant heading offset between the attitude aiding's frame
-    /// and the IMU's (issue 15): the yaw innovation is integrated with a
-    /// 20 s time constant, bounded to ±10°, paused while a fault is
-    /// flagged, and taken off the yaw aiding. Read it with
+    /// and the IMU's (issue 15) from the GNSS velocity's horizontal changes
+    /// against the IMU-propagated ones, bounded to ±10°, paused while a
+    /// fault is flagged, and taken off the yaw aiding. While the offset is
+    /// unresolved, manoeuvres do not teach the horizontal accelerometer
+    /// biases and learning lasts longer (see `ukf_monitor/heading.rs`,
+    /// docs/results.md). Read it with
     /// [`UkfMonitor::heading_offset_estimate`](super::UkfMonitor::heading_offset_estimate).
     pub estimate_heading_offset: bool,
     /// An aiding channel silent for this long is "not monitored", s.

@@ -41,8 +41,13 @@
 //! residual (after an applied step, what the step leaves of it). An aiding
 //! epoch whose IMU-propagated horizontal acceleration gives
 //! `u·|a_h| > ½·min_fault` (smaller horizontal accelerometer) is marked
-//! contaminated, and the accelerometers' nominal biases are not learnt from
-//! it (the gyros' are).
+//! contaminated: the horizontal accelerometers' nominal biases are not
+//! learnt from it (a_z's and the gyros' are: a vertical velocity error is
+//! not turned by a heading error), and the learning phase does not count
+//! it, so learning lasts until it has `learn_s` of clean epochs (on the
+//! aircraft 12.5–53 s instead of 10 s; the report says `Learning` and
+//! `NotMonitored` meanwhile). Each applied step also turns the filter's
+//! heading with the corrected yaw aiding (`turn_heading`).
 
 use super::{UkfMonitor, MAX_DELAY_STEPS};
 use crate::math::{wrap_pi, Real};
