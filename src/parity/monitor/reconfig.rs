@@ -88,65 +88,77 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                     self.reconfig = Reconfig::Idle;
                     self.reduce(k);
                 }
-                Reconfig::Tests(stage, mut newton, lead_in) => {
+                Reconfig::Tests(stage, newton, lead_in) => {
                     self.reconfig = Reconfig::Idle;
-                    let built = self.tests.as_mut().and_then(|t| {
-                        let (cfg, space) = (&self.cfg, &self.space);
-                        build_stage(t, stage, &mut newton, space, cfg, &self.scales, &self.chi2)
-                    });
-                    match built {
-                        // Non-finite training data: train again rather
-                        // than test with it.
-                        None if lead_in => {
-                            self.tests = None;
-                            self.held = None;
-                            self.block = nalgebra::SVector::zeros();
-                            self.block_n = 0;
-                            self.trainer = Trainer::new(
-                                self.cfg.train_samples,
-                                self.cfg.block_len,
-                                self.cfg.ridge,
-                            );
-                        }
-                        None => {
-                            self.tests = None;
-                            self.phase = ParityPhase::Lost;
-                        }
-                        Some(next) if next < build_stages(N) => {
-                            self.reconfig = Reconfig::Tests(next, newton, lead_in);
-                        }
-                        Some(_) if lead_in => {
-                            self.phase = if self.cfg.calibrate_samples > 0 {
-                                ParityPhase::Calibrating
-                            } else {
-                                ParityPhase::Monitoring
-                            };
-                        }
-                        Some(_) => {}
-                    }
+                    self.tests_stage(stage, newton, lead_in);
                 }
                 Reconfig::Transform(m, part) => {
                     self.reconfig = Reconfig::Idle;
-                    // Part 0 holds the old space's `V`: the transition
-                    // `c = V_new V_oldᵀ` is formed here, not in the
-                    // (isolating) step that built the new space.
-                    let c = if part == 0 {
-                        self.space.v() * m.transpose()
-                    } else {
-                        m
-                    };
-                    let dim = self.space.dim();
-                    if let Some(ms) = self.ms.as_mut() {
-                        ms.transform_part(&c, dim, part);
-                    }
-                    if part + 1 < TRANSFORM_PARTS {
-                        self.reconfig = Reconfig::Transform(c, part + 1);
-                    }
+                    self.transform_stage(&m, part);
                 }
             }
             if !to_end {
                 return;
             }
+        }
+    }
+
+    /// Part `part` of carrying the multi-scale learning into the new space
+    /// (`m`: the transition, or in part 0 the old space's `V`).
+    #[inline(never)]
+    fn transform_stage(&mut self, m: &SMatrix<T, N, N>, part: usize) {
+        // Part 0 holds the old space's `V`: the transition
+        // `c = V_new V_oldᵀ` is formed here, not in the
+        // (isolating) step that built the new space.
+        let c = if part == 0 {
+            self.space.v() * m.transpose()
+        } else {
+            *m
+        };
+        let dim = self.space.dim();
+        if let Some(ms) = self.ms.as_mut() {
+            ms.transform_part(&c, dim, part);
+        }
+        if part + 1 < TRANSFORM_PARTS {
+            self.reconfig = Reconfig::Transform(c, part + 1);
+        }
+    }
+
+    /// One stage of building the white-noise tests (`lead_in`: the first
+    /// build, at the end of training). Out of line: the multi-scale
+    /// monitor's steps never run it.
+    #[inline(never)]
+    fn tests_stage(&mut self, stage: usize, mut newton: Newton, lead_in: bool) {
+        let built = self.tests.as_mut().and_then(|t| {
+            let (cfg, space) = (&self.cfg, &self.space);
+            build_stage(t, stage, &mut newton, space, cfg, &self.scales, &self.chi2)
+        });
+        match built {
+            // Non-finite training data: train again rather
+            // than test with it.
+            None if lead_in => {
+                self.tests = None;
+                self.held = None;
+                self.block = nalgebra::SVector::zeros();
+                self.block_n = 0;
+                self.trainer =
+                    Trainer::new(self.cfg.train_samples, self.cfg.block_len, self.cfg.ridge);
+            }
+            None => {
+                self.tests = None;
+                self.phase = ParityPhase::Lost;
+            }
+            Some(next) if next < build_stages(N) => {
+                self.reconfig = Reconfig::Tests(next, newton, lead_in);
+            }
+            Some(_) if lead_in => {
+                self.phase = if self.cfg.calibrate_samples > 0 {
+                    ParityPhase::Calibrating
+                } else {
+                    ParityPhase::Monitoring
+                };
+            }
+            Some(_) => {}
         }
     }
 

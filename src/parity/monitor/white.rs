@@ -64,6 +64,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// build stage ran in this step, so a block held during the build
     /// waits one more step (at most one stage or one held decision per
     /// step, not both).
+    #[inline(never)] // the white-noise path only: kept out of `step`
     pub(super) fn monitor(
         &mut self,
         p: &SVector<T, N>,
@@ -361,7 +362,6 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         self.cusum_neg = [T::zero(); N];
     }
 }
-
 
 /// Sensor maximising `(a_kᵀ r)² / q_k` and its bias estimate `a_kᵀ r / q_k`.
 fn isolate<T: Real, const N: usize>(
