@@ -28,7 +28,8 @@ use white::Tests;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ParityPhase {
-    /// Learning offset, leakage and noise; no decisions.
+    /// Learning offset, leakage and noise, then (white-noise tests) building
+    /// the tests from them one stage per step; no decisions.
     Training,
     /// Running the tests fault-free to calibrate their thresholds; no
     /// alarms.
