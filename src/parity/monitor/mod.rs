@@ -15,6 +15,7 @@ use super::training::{Baseline, Trainer};
 use super::{ConfigError, Geometry, ParitySpace};
 pub use reconfig::reconfig_steps;
 
+mod build;
 mod flight;
 mod reconfig;
 mod white;
@@ -27,7 +28,8 @@ use white::Tests;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ParityPhase {
-    /// Learning offset, leakage and noise; no decisions.
+    /// Learning offset, leakage and noise, then (white-noise tests) building
+    /// the tests from them one stage per step; no decisions.
     Training,
     /// Running the tests fault-free to calibrate their thresholds; no
     /// alarms.
@@ -145,8 +147,12 @@ pub struct ParityMonitor<T: Real, const N: usize, const W: usize> {
     /// Consecutive decisions above threshold (the alarm's confirmation).
     ms_above: u16,
     ms_trained: bool,
-    /// White-noise tests being rebuilt after an isolation.
+    /// White-noise tests being built (end of training) or rebuilt (after
+    /// an isolation or a failure).
     reconfig: Reconfig<T, N>,
+    /// A block completed while the tests were still being built at the end
+    /// of training, decided once they are.
+    held: Option<SVector<T, N>>,
 }
 
 impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
@@ -229,6 +235,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             ms_blocks: 0,
             ms_trained: false,
             reconfig: Reconfig::Idle,
+            held: None,
         }
         .with_multiscale()
     }
@@ -344,6 +351,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         // multi-scale block in work (issue 17: a block's work spread over
         // the next block's samples, which may isolate and reconfigure): both
         // before this sample is projected.
+        let staged = !self.configured();
         self.advance_reconfig(false);
         self.multiscale_advance(false, &mut report);
         let all_active_usable = self
@@ -370,8 +378,8 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                 }
             } else {
                 match self.phase {
-                    ParityPhase::Training => self.train(&p, &x),
-                    _ => self.monitor(&p, &x, &mut report),
+                    ParityPhase::Training if self.tests.is_none() => self.train(&p, &x),
+                    _ => self.monitor(&p, &x, &mut report, staged),
                 }
             }
         }
@@ -446,6 +454,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         }
         self.block = SVector::zeros();
         self.block_n = 0;
+        self.held = None;
         self.filled = 0;
         self.head = 0;
         self.cusum_pos = [T::zero(); N];

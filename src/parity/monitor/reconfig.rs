@@ -2,12 +2,16 @@
 //! the reduced parity space, then either the white-noise tests rebuilt
 //! ([`build_stage`]) or the multi-scale tests' learning carried into the
 //! new space, one stage per step, instead of all in the step that isolated.
-//! (The white-noise tests' construction at the end of training and of
-//! calibration still runs in one step, ≈ 168 k instructions on the M4F:
-//! the lead-in's calibration and monitoring start on the next sample.) The tests are idle meanwhile (their window and
-//! CUSUMs restart after a reconfiguration anyway) and fusion goes on; what
-//! the stages build is what the one-shot reconfiguration built, in use at
-//! most [`reconfig_steps`] steps later.
+//! The tests are idle meanwhile (their window and CUSUMs restart after a
+//! reconfiguration anyway) and fusion goes on; what the stages build is
+//! what the one-shot reconfiguration built, in use at most
+//! [`reconfig_steps`] steps later.
+//!
+//! The white-noise tests' first build, at the end of training, runs in the
+//! same stages; there the samples go on into blocks against the learned
+//! baseline, the phase stays `Training` until the tests are built, and a
+//! block completed meanwhile is decided once they are (`white.rs`). The end
+//! of calibration only scales the thresholds.
 
 use nalgebra::SMatrix;
 
@@ -15,7 +19,7 @@ use crate::math::Real;
 
 use super::super::multiscale::{Multiscale, TRANSFORM_PARTS};
 use super::super::training::{Baseline, Trainer};
-use super::white::{build_stage, build_stages, Newton};
+use super::build::{build_stage, build_stages, Newton};
 use super::{ParityMonitor, ParityPhase};
 
 /// Steps a reconfiguration takes at most with `N` sensors.
@@ -37,8 +41,10 @@ pub(super) enum Reconfig<T: Real, const N: usize> {
     /// The space without sensor `k` next.
     Space(usize),
     /// White-noise tests: build stage `.0` next (the tests in progress are
-    /// in `tests`); `.1` the CUSUM threshold's root search in progress.
-    Tests(usize, Newton),
+    /// in `tests`); `.1` the CUSUM threshold's root search in progress;
+    /// `.2` the first build, at the end of training (samples go on into
+    /// blocks; calibration or monitoring starts once built).
+    Tests(usize, Newton, bool),
     /// Multi-scale tests: part `.1` of carrying the learning through the
     /// transition `.0` (`p_new = c p`; in part 0 still the old space's `V`,
     /// from which the transition is formed).
@@ -56,7 +62,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     pub(super) fn reconfig_stage(&self) -> u8 {
         let i = match self.reconfig {
             Reconfig::Idle | Reconfig::Space(_) => 0,
-            Reconfig::Tests(stage, _) => 1 + stage,
+            Reconfig::Tests(stage, ..) => 1 + stage,
             Reconfig::Transform(_, part) => 1 + part,
         };
         u8::try_from(i).unwrap_or(u8::MAX)
@@ -67,7 +73,10 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// samples accumulate in the new space meanwhile; a block closing
     /// finishes the carrying first).
     pub(super) fn accepts_samples(&self) -> bool {
-        matches!(self.reconfig, Reconfig::Idle | Reconfig::Transform(..))
+        matches!(
+            self.reconfig,
+            Reconfig::Idle | Reconfig::Transform(..) | Reconfig::Tests(_, _, true)
+        )
     }
 
     /// Runs one stage of the reconfiguration in progress (`to_end`: all).
@@ -79,45 +88,77 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                     self.reconfig = Reconfig::Idle;
                     self.reduce(k);
                 }
-                Reconfig::Tests(stage, mut newton) => {
+                Reconfig::Tests(stage, newton, lead_in) => {
                     self.reconfig = Reconfig::Idle;
-                    let built = self.tests.as_mut().and_then(|t| {
-                        let (cfg, space) = (&self.cfg, &self.space);
-                        build_stage(t, stage, &mut newton, space, cfg, &self.scales, &self.chi2)
-                    });
-                    match built {
-                        None => {
-                            self.tests = None;
-                            self.phase = ParityPhase::Lost;
-                        }
-                        Some(next) if next < build_stages(N) => {
-                            self.reconfig = Reconfig::Tests(next, newton);
-                        }
-                        Some(_) => {}
-                    }
+                    self.tests_stage(stage, newton, lead_in);
                 }
                 Reconfig::Transform(m, part) => {
                     self.reconfig = Reconfig::Idle;
-                    // Part 0 holds the old space's `V`: the transition
-                    // `c = V_new V_oldᵀ` is formed here, not in the
-                    // (isolating) step that built the new space.
-                    let c = if part == 0 {
-                        self.space.v() * m.transpose()
-                    } else {
-                        m
-                    };
-                    let dim = self.space.dim();
-                    if let Some(ms) = self.ms.as_mut() {
-                        ms.transform_part(&c, dim, part);
-                    }
-                    if part + 1 < TRANSFORM_PARTS {
-                        self.reconfig = Reconfig::Transform(c, part + 1);
-                    }
+                    self.transform_stage(&m, part);
                 }
             }
             if !to_end {
                 return;
             }
+        }
+    }
+
+    /// Part `part` of carrying the multi-scale learning into the new space
+    /// (`m`: the transition, or in part 0 the old space's `V`).
+    #[inline(never)]
+    fn transform_stage(&mut self, m: &SMatrix<T, N, N>, part: usize) {
+        // Part 0 holds the old space's `V`: the transition
+        // `c = V_new V_oldᵀ` is formed here, not in the
+        // (isolating) step that built the new space.
+        let c = if part == 0 {
+            self.space.v() * m.transpose()
+        } else {
+            *m
+        };
+        let dim = self.space.dim();
+        if let Some(ms) = self.ms.as_mut() {
+            ms.transform_part(&c, dim, part);
+        }
+        if part + 1 < TRANSFORM_PARTS {
+            self.reconfig = Reconfig::Transform(c, part + 1);
+        }
+    }
+
+    /// One stage of building the white-noise tests (`lead_in`: the first
+    /// build, at the end of training). Out of line: the multi-scale
+    /// monitor's steps never run it.
+    #[inline(never)]
+    fn tests_stage(&mut self, stage: usize, mut newton: Newton, lead_in: bool) {
+        let built = self.tests.as_mut().and_then(|t| {
+            let (cfg, space) = (&self.cfg, &self.space);
+            build_stage(t, stage, &mut newton, space, cfg, &self.scales, &self.chi2)
+        });
+        match built {
+            // Non-finite training data: train again rather
+            // than test with it.
+            None if lead_in => {
+                self.tests = None;
+                self.held = None;
+                self.block = nalgebra::SVector::zeros();
+                self.block_n = 0;
+                self.trainer =
+                    Trainer::new(self.cfg.train_samples, self.cfg.block_len, self.cfg.ridge);
+            }
+            None => {
+                self.tests = None;
+                self.phase = ParityPhase::Lost;
+            }
+            Some(next) if next < build_stages(N) => {
+                self.reconfig = Reconfig::Tests(next, newton, lead_in);
+            }
+            Some(_) if lead_in => {
+                self.phase = if self.cfg.calibrate_samples > 0 {
+                    ParityPhase::Calibrating
+                } else {
+                    ParityPhase::Monitoring
+                };
+            }
+            Some(_) => {}
         }
     }
 
@@ -147,7 +188,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                 block_cov: c * t.baseline.block_cov * c.transpose(),
                 correlation_factor: t.baseline.correlation_factor,
             };
-            self.reconfig = Reconfig::Tests(0, Newton::START);
+            self.reconfig = Reconfig::Tests(0, Newton::START, false);
         } else if self.ms.is_none() {
             // Failed during training: start training the reduced set.
             self.trainer = Trainer::new(self.cfg.train_samples, self.cfg.block_len, self.cfg.ridge);
