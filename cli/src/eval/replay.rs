@@ -67,6 +67,27 @@ pub struct ReplayOptions {
     /// Bound of the learned innovation inflation (UKF monitor; 1 disables;
     /// None: 25 for the flight profile, 1 for the simulated one).
     pub max_inflation: Option<f64>,
+    /// Aiding latency (UKF monitor): fixed, or estimated online.
+    pub aiding_delay: AidingDelay,
+    /// Estimate the attitude aiding's heading offset online (UKF monitor).
+    pub estimate_heading_offset: bool,
+}
+
+/// How the UKF monitor treats the aiding's latency
+/// ([`UkfMonitorConfig::aiding_delay_s`],
+/// [`UkfMonitorConfig::estimate_aiding_delay`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AidingDelay {
+    /// A known latency, s (0: fused on arrival).
+    Fixed(f64),
+    /// Estimated online from the attitude aiding's changes, starting at 0.
+    Auto,
+}
+
+impl Default for AidingDelay {
+    fn default() -> Self {
+        Self::Fixed(0.0)
+    }
 }
 
 impl Default for ReplayOptions {
@@ -84,6 +105,8 @@ impl Default for ReplayOptions {
             att_sigma: [1.0 * deg, 1.0 * deg, 10.0 * deg],
             monitor: MonitorKind::Ukf,
             max_inflation: None,
+            aiding_delay: AidingDelay::default(),
+            estimate_heading_offset: false,
         }
     }
 }
@@ -366,6 +389,20 @@ pub fn replay_observed(
             }
         };
         cfg.aiding = kind;
+        match opts.aiding_delay {
+            AidingDelay::Fixed(d) => cfg.aiding_delay_s = d,
+            AidingDelay::Auto => cfg.estimate_aiding_delay = true,
+        }
+        cfg.estimate_heading_offset = opts.estimate_heading_offset;
+        if opts.monitor == MonitorKind::Otsukf
+            && (opts.aiding_delay != AidingDelay::Fixed(0.0) || opts.estimate_heading_offset)
+        {
+            bail!(
+                "{}: the aiding delay and heading offset are the UKF monitor's \
+                 (--monitor ukf); the OTSUKF fuses aiding on arrival",
+                input.display()
+            );
+        }
         if k == 0 {
             sum.process_noise_psd = cfg.process_noise.psd.iter().copied().collect();
             sum.meas_sigma = cfg.meas_sigma.iter().copied().collect();
@@ -514,8 +551,16 @@ pub fn replay_observed(
                     }
                 }
             }
-            if let (Some(inf), true) = (r.detail.innovation_inflation, row_is_last) {
-                sum.innovation_inflation.push(inf);
+            if row_is_last {
+                if let Some(inf) = r.detail.innovation_inflation {
+                    sum.innovation_inflation.push(inf);
+                }
+                if let Some(d) = r.detail.aiding_delay_s {
+                    sum.aiding_delay_s.push(d);
+                }
+                if let Some(h) = r.detail.heading_offset_rad {
+                    sum.heading_offset_deg.push(h.to_degrees());
+                }
             }
             cells.push((r.phase, r.status, r.fault_estimate, r.detail.fault_sigma));
         }
@@ -552,6 +597,13 @@ pub fn replay_observed(
         }
     }
     sum.imus = imu_idx.len();
+    if opts.monitor == MonitorKind::Ukf {
+        sum.aiding_delay_mode = Some(match opts.aiding_delay {
+            AidingDelay::Fixed(_) => "fixed".into(),
+            AidingDelay::Auto => "auto".into(),
+        });
+    }
+    sum.heading_offset_estimated = opts.estimate_heading_offset;
     sum.span_s = (
         rows.first().map_or(0.0, |r| r.t),
         rows.last().map_or(0.0, |r| r.t),

@@ -94,4 +94,18 @@ pub struct ReplaySummary {
     /// OTSUKF).
     #[serde(rename = "innovation_inflation_factor")]
     pub innovation_inflation: Vec<[f64; 6]>,
+    /// How the UKF monitor's aiding latency was set: `fixed`
+    /// (`--aiding-delay SECONDS`, default 0) or `auto` (estimated online);
+    /// `None` for the OTSUKF, which fuses aiding on arrival.
+    pub aiding_delay_mode: Option<String>,
+    /// Per IMU, the aiding latency the UKF monitor fused at on the last
+    /// row, s: the configured value, or with `--aiding-delay auto` the
+    /// online estimate (empty for the OTSUKF).
+    pub aiding_delay_s: Vec<f64>,
+    /// Whether the heading offset of the attitude aiding was estimated
+    /// (`--heading-offset auto`).
+    pub heading_offset_estimated: bool,
+    /// Per IMU, the heading offset the UKF monitor took off the yaw aiding
+    /// on the last row, degrees (0 unless estimated; empty for the OTSUKF).
+    pub heading_offset_deg: Vec<f64>,
 }
