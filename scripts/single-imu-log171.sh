@@ -35,6 +35,11 @@ if s.get("aiding_delay_s"):
         s["aiding_delay_mode"], ", ".join("%.3f" % d for d in s["aiding_delay_s"]),
         "estimated" if s["heading_offset_estimated"] else "off",
         ", ".join("%.2f" % h for h in s["heading_offset_deg"])))
+print("  velocity aiding delay (%s): %s s" % (s["velocity_delay_mode"],
+    ", ".join("%.2f" % d for d in s["velocity_delay_s"])))
+if s.get("innovation_inflation_factor"):
+    print("  learned inflation [vn ve vd roll pitch yaw]: " + "; ".join(
+        " ".join("%.1f" % x for x in f) for f in s["innovation_inflation_factor"]))
 for k in range(s["imus"]):
     ch = s["channels"][6 * k:6 * k + 6]
     ev = sum(c["flag_events"] for c in ch)

@@ -89,6 +89,12 @@ pub(crate) struct Args {
     /// the aiding's yaw.
     #[arg(long, value_enum, default_value_t = HeadingArg::Off)]
     heading_offset: HeadingArg,
+    /// Latency of the velocity aiding alone (GNSS/DVL columns), seconds, or
+    /// `auto` to fit it (0–0.5 s) on each IMU's learning span from the
+    /// velocity changes against the integrated specific force. Each velocity
+    /// sample is then fused at the row it describes. Either monitor.
+    #[arg(long, value_parser = parse_delay, default_value = "0")]
+    velocity_delay: imu_fdi_cli::eval::replay::AidingDelay,
     #[command(flatten)]
     detect: DetectOpts,
 }
@@ -138,6 +144,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         att_sigma_deg,
         aiding_delay,
         heading_offset,
+        velocity_delay,
         detect,
     } = args;
     let ropts = options("replay", &detect);
@@ -181,6 +188,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         max_inflation,
         aiding_delay,
         estimate_heading_offset: heading_offset == HeadingArg::Auto,
+        velocity_delay,
     };
     // With --json, stdout carries only the JSON object.
     macro_rules! note {
@@ -300,6 +308,15 @@ pub(crate) fn run(args: Args) -> Result<()> {
             list(&s.heading_offset_deg, &|x| format!("{x:.2}"))
         );
     }
+    note!(
+        "  velocity aiding delay ({}): {} s",
+        s.velocity_delay_mode,
+        s.velocity_delay_s
+            .iter()
+            .map(|x| format!("{x:.3}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
     if let Some(p) = out {
         note!("wrote {}", p.display());
     }

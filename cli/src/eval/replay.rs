@@ -71,6 +71,12 @@ pub struct ReplayOptions {
     pub aiding_delay: AidingDelay,
     /// Estimate the attitude aiding's heading offset online (UKF monitor).
     pub estimate_heading_offset: bool,
+    /// Latency of the velocity aiding alone (GNSS or DVL columns), fixed or
+    /// learned on each IMU's learning span ([`super::gnss_lag`]); either
+    /// monitor. The replay fuses each velocity sample at the row it
+    /// describes (the log is at hand: the offline equivalent of delayed
+    /// fusion at a known lag).
+    pub velocity_delay: AidingDelay,
 }
 
 /// How the UKF monitor treats the aiding's latency
@@ -107,6 +113,7 @@ impl Default for ReplayOptions {
             max_inflation: None,
             aiding_delay: AidingDelay::default(),
             estimate_heading_offset: false,
+            velocity_delay: AidingDelay::default(),
         }
     }
 }
@@ -363,7 +370,35 @@ pub fn replay_observed(
     };
     sum.profile = format!("{profile:?}");
     let mut monitors = Vec::new();
+    // Per IMU, the velocity aiding's lag in rows (see `velocity_delay`).
+    let mut vel_lag = Vec::new();
     for k in 0..imu_idx.len() {
+        let lag = match opts.velocity_delay {
+            AidingDelay::Fixed(d) => (d / dt).round().max(0.0) as usize,
+            AidingDelay::Auto => {
+                let probe = sim_cfg(kind);
+                let t0 = rows.first().map_or(0.0, |r| r.t);
+                let span = probe.converge_s + opts.learn_s.unwrap_or(probe.learn_s.max(20.0));
+                let head: Vec<&Row> = rows.iter().take_while(|r| r.t < t0 + span).collect();
+                let avail3 = |r: &Row, o: usize| {
+                    let ok = r.avail.iter().skip(o).take(3).all(|a| *a);
+                    ok.then(|| core::array::from_fn(|i| r.z.get(o + i).copied().unwrap_or(0.0)))
+                };
+                super::gnss_lag::estimate(
+                    &head.iter().map(|r| r.t).collect::<Vec<_>>(),
+                    &head
+                        .iter()
+                        .map(|r| r.imus.get(k).copied().unwrap_or([f64::NAN; 6]))
+                        .collect::<Vec<_>>(),
+                    &head.iter().map(|r| avail3(r, 0)).collect::<Vec<_>>(),
+                    &head.iter().map(|r| avail3(r, 3)).collect::<Vec<_>>(),
+                    (0.5 / dt).round() as usize,
+                )
+                .map_or(0, |l| l.rows)
+            }
+        };
+        sum.velocity_delay_s.push(lag as f64 * dt);
+        vel_lag.push(lag);
         let mut cfg = match profile {
             Profile::Flight => {
                 let probe = sim_cfg(kind);
@@ -466,9 +501,27 @@ pub fn replay_observed(
         let t = row.t;
         let step_dt = prev_t.map_or(dt, |p| t - p);
         prev_t = Some(t);
-        let meas = Measurement {
-            z: MeasVec::from_iterator(row.z.iter().copied()),
-            available: row.avail,
+        // Per IMU: the attitude of this row, the velocity sample that
+        // describes this row (logged `lag` rows later).
+        let meas_for = |lag: usize| {
+            let mut m = Measurement {
+                z: MeasVec::from_iterator(row.z.iter().copied()),
+                available: row.avail,
+            };
+            for i in 0..3 {
+                let later = rows.get(row_index + lag);
+                let (z, a) = later.map_or((0.0, false), |r| {
+                    (
+                        r.z.get(i).copied().unwrap_or(0.0),
+                        r.avail.get(i).copied().unwrap_or(false),
+                    )
+                });
+                if let (Some(mz), Some(ma)) = (m.z.get_mut(i), m.available.get_mut(i)) {
+                    *mz = z;
+                    *ma = a;
+                }
+            }
+            m
         };
         let mut record = vec![format!("{t}")];
         let mut cells = Vec::new();
@@ -477,7 +530,11 @@ pub fn replay_observed(
             .enumerate()
             .map(|(k, m)| {
                 let imu = ImuVec::from_iterator(row.imus.get(k).copied().unwrap_or([f64::NAN; 6]));
-                m.step(&imu, step_dt, &meas)
+                m.step(
+                    &imu,
+                    step_dt,
+                    &meas_for(vel_lag.get(k).copied().unwrap_or(0)),
+                )
             })
             .collect();
         let raised = |r: &imu_fdi::monitor::Report<f64, _>, i: usize| {
@@ -604,6 +661,10 @@ pub fn replay_observed(
         });
     }
     sum.heading_offset_estimated = opts.estimate_heading_offset;
+    sum.velocity_delay_mode = match opts.velocity_delay {
+        AidingDelay::Fixed(_) => "fixed".into(),
+        AidingDelay::Auto => "auto".into(),
+    };
     sum.span_s = (
         rows.first().map_or(0.0, |r| r.t),
         rows.last().map_or(0.0, |r| r.t),

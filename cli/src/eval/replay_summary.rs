@@ -108,4 +108,10 @@ pub struct ReplaySummary {
     /// Per IMU, the heading offset the UKF monitor took off the yaw aiding
     /// on the last row, degrees (0 unless estimated; empty for the OTSUKF).
     pub heading_offset_deg: Vec<f64>,
+    /// How the velocity aiding's own latency was set: `fixed`
+    /// (`--velocity-delay SECONDS`, default 0) or `auto` (fitted on each
+    /// IMU's learning span, `imu_fdi_cli::eval::gnss_lag`).
+    pub velocity_delay_mode: String,
+    /// Per IMU, that latency, s (a multiple of the IMU period).
+    pub velocity_delay_s: Vec<f64>,
 }
