@@ -384,7 +384,7 @@ pub fn replay_observed(
                     let ok = r.avail.iter().skip(o).take(3).all(|a| *a);
                     ok.then(|| core::array::from_fn(|i| r.z.get(o + i).copied().unwrap_or(0.0)))
                 };
-                super::gnss_lag::estimate(
+                let fit = super::gnss_lag::estimate(
                     &head.iter().map(|r| r.t).collect::<Vec<_>>(),
                     &head
                         .iter()
@@ -393,8 +393,11 @@ pub fn replay_observed(
                     &head.iter().map(|r| avail3(r, 0)).collect::<Vec<_>>(),
                     &head.iter().map(|r| avail3(r, 3)).collect::<Vec<_>>(),
                     (0.5 / dt).round() as usize,
-                )
-                .map_or(0, |l| l.rows)
+                );
+                if let Some(l) = fit {
+                    sum.velocity_fit_rms_m_s.push(l.rms_m_s);
+                }
+                fit.map_or(0, |l| l.rows)
             }
         };
         sum.velocity_delay_s.push(lag as f64 * dt);

@@ -114,4 +114,9 @@ pub struct ReplaySummary {
     pub velocity_delay_mode: String,
     /// Per IMU, that latency, s (a multiple of the IMU period).
     pub velocity_delay_s: Vec<f64>,
+    /// Per IMU, with `--velocity-delay auto`: RMS of the fit's residual
+    /// velocity change between consecutive aiding samples at that lag, m/s
+    /// (two aiding errors and the IMU's integration error over one
+    /// interval).
+    pub velocity_fit_rms_m_s: Vec<f64>,
 }
