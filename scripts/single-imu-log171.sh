@@ -1,31 +1,45 @@
 #!/usr/bin/env bash
 # Issue 15's log171 figures for one single-IMU monitor (ukf | otsukf): the
-# real flight (ArduPilot log171 extracts: IMU CSV + GPS velocity + attitude,
-# mapped by `replay`), cut at 235 s, each IMU monitored alone. Prints the
+# real flight (ArduPilot log171, the extracts shipped in tests/data: SPEC §10
+# IMU CSV + GPS velocity + attitude, mapped by `replay`), cut at 235 s, each IMU monitored alone. Prints the
 # fault-free flag events per IMU, then for every IMU and axis a 2 °/s gyro
 # step and a 0.5 m/s² accelerometer step (positive, 150–170 s) and whether
 # it was flagged with the right sign within 10 s ("0.0s": already flagged
 # at onset). Needs python3.
 # Step sizes: ACC (m/s², default 0.5) and GYRO_DEG (°/s, default 2).
 # Usage: scripts/single-imu-log171.sh [ukf|otsukf] [extra replay options]
+#   e.g. scripts/single-imu-log171.sh ukf --aiding-delay auto --heading-offset auto
+# DATA (default tests/data) and IMU_CSV (default $DATA/ap_log171_3imu.csv)
+# point it at other copies of the extracts.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 MON=${1:-ukf}
 ACC=${ACC:-0.5}
 GYRO=$(python3 -c "import math; print(math.radians(${GYRO_DEG:-2}))")
 shift || true
-DATA=${DATA:-../shared/data}
+DATA=${DATA:-tests/data}
+IMU_CSV=${IMU_CSV:-$DATA/ap_log171_3imu.csv}
 BIN=./target/release/imu-fdi-sim
 cargo build -q -p imu-fdi-cli --release --bin imu-fdi-sim
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
-LOG=(replay "$DATA/ap_log171_imu_3x.csv" --gnss "$DATA/ap_log171_gps_vel_ned.csv"
+LOG=(replay "$IMU_CSV" --gnss "$DATA/ap_log171_gps_vel_ned.csv"
   --att "$DATA/ap_log171_attitude_quat.csv" --from 80 --to 235 --monitor "$MON" "$@")
 $BIN "${LOG[@]}" --json 2>/dev/null >"$TMP/free.json"
 python3 - "$TMP/free.json" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1]))
 print(f"{s['monitor']}: log171 80–235 s, monitoring from {s['monitoring_from_s']} s")
+if s.get("aiding_delay_s"):
+    print("  aiding delay (%s): %s s; heading offset (%s): %s deg" % (
+        s["aiding_delay_mode"], ", ".join("%.3f" % d for d in s["aiding_delay_s"]),
+        "estimated" if s["heading_offset_estimated"] else "off",
+        ", ".join("%.2f" % h for h in s["heading_offset_deg"])))
+print("  velocity aiding delay (%s): %s s" % (s["velocity_delay_mode"],
+    ", ".join("%.2f" % d for d in s["velocity_delay_s"])))
+if s.get("innovation_inflation_factor"):
+    print("  learned inflation [vn ve vd roll pitch yaw]: " + "; ".join(
+        " ".join("%.1f" % x for x in f) for f in s["innovation_inflation_factor"]))
 for k in range(s["imus"]):
     ch = s["channels"][6 * k:6 * k + 6]
     ev = sum(c["flag_events"] for c in ch)

@@ -78,8 +78,46 @@ pub(crate) struct Args {
     /// (an autopilot's own estimate is not independent of the IMU: keep it wide).
     #[arg(long, value_delimiter = ',', default_value = "1,1,10")]
     att_sigma_deg: Vec<f64>,
+    /// UKF monitor: latency of the aiding, seconds (fused against the
+    /// state of its own time, PX4 EKF2-style delayed fusion), or `auto` to
+    /// estimate it online from the attitude aiding (up to 32 IMU periods
+    /// minus the attitude interval).
+    #[arg(long, value_parser = parse_delay, default_value = "0")]
+    aiding_delay: imu_fdi_cli::eval::replay::AidingDelay,
+    /// UKF monitor: `auto` learns a constant heading offset between the
+    /// attitude aiding and the IMU (±10°, 20 s time constant); `off` trusts
+    /// the aiding's yaw.
+    #[arg(long, value_enum, default_value_t = HeadingArg::Off)]
+    heading_offset: HeadingArg,
+    /// Latency of the velocity aiding alone (GNSS/DVL columns), seconds, or
+    /// `auto` to fit it (0–0.5 s) on each IMU's learning span from the
+    /// velocity changes against the integrated specific force. Each velocity
+    /// sample is then fused at the row it describes. Either monitor.
+    #[arg(long, value_parser = parse_delay, default_value = "0")]
+    velocity_delay: imu_fdi_cli::eval::replay::AidingDelay,
     #[command(flatten)]
     detect: DetectOpts,
+}
+
+/// `--heading-offset`.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum HeadingArg {
+    Off,
+    Auto,
+}
+
+/// `--aiding-delay SECONDS|auto`.
+fn parse_delay(s: &str) -> Result<imu_fdi_cli::eval::replay::AidingDelay, String> {
+    use imu_fdi_cli::eval::replay::AidingDelay;
+    if s.eq_ignore_ascii_case("auto") {
+        return Ok(AidingDelay::Auto);
+    }
+    match s.parse::<f64>() {
+        Ok(d) if d.is_finite() && d >= 0.0 => Ok(AidingDelay::Fixed(d)),
+        _ => Err(format!(
+            "'{s}' is neither a delay in seconds (≥ 0) nor 'auto'"
+        )),
+    }
 }
 
 /// Runs `replay`.
@@ -104,6 +142,9 @@ pub(crate) fn run(args: Args) -> Result<()> {
         learn,
         vel_sigma,
         att_sigma_deg,
+        aiding_delay,
+        heading_offset,
+        velocity_delay,
         detect,
     } = args;
     let ropts = options("replay", &detect);
@@ -145,6 +186,9 @@ pub(crate) fn run(args: Args) -> Result<()> {
         att_sigma,
         monitor: monitor.into(),
         max_inflation,
+        aiding_delay,
+        estimate_heading_offset: heading_offset == HeadingArg::Auto,
+        velocity_delay,
     };
     // With --json, stdout carries only the JSON object.
     macro_rules! note {
@@ -248,6 +292,31 @@ pub(crate) fn run(args: Args) -> Result<()> {
             c.first_detection_s
         );
     }
+    if !s.aiding_delay_s.is_empty() {
+        let list = |v: &[f64], f: &dyn Fn(f64) -> String| {
+            v.iter().map(|x| f(*x)).collect::<Vec<_>>().join(", ")
+        };
+        note!(
+            "  aiding delay ({}): {} s; heading offset ({}): {}°",
+            s.aiding_delay_mode.as_deref().unwrap_or("fixed"),
+            list(&s.aiding_delay_s, &|x| format!("{x:.3}")),
+            if s.heading_offset_estimated {
+                "estimated"
+            } else {
+                "off"
+            },
+            list(&s.heading_offset_deg, &|x| format!("{x:.2}"))
+        );
+    }
+    note!(
+        "  velocity aiding delay ({}): {} s",
+        s.velocity_delay_mode,
+        s.velocity_delay_s
+            .iter()
+            .map(|x| format!("{x:.3}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
     if let Some(p) = out {
         note!("wrote {}", p.display());
     }

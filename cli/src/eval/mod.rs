@@ -8,6 +8,7 @@
 pub mod array_run;
 pub mod array_sweep;
 pub mod campaign;
+pub mod gnss_lag;
 pub mod inject;
 pub mod parity_campaign;
 pub mod parity_injection;
@@ -15,6 +16,7 @@ pub mod parity_replay;
 pub mod parity_tables;
 pub mod replay;
 pub mod replay_monitor;
+mod replay_options;
 mod replay_sim;
 mod replay_summary;
 pub mod stats_ci;

@@ -27,66 +27,7 @@ fn parse_opt(rec: &csv::StringRecord, idx: Option<usize>) -> Option<f64> {
     s.parse::<f64>().ok()
 }
 
-/// How the monitor is tuned for a replay.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Profile {
-    /// The built-in scenarios' tuning (S2 for DVL aiding, S3 for GNSS):
-    /// for simulated runs written by `simulate`.
-    Sim,
-    /// A real flight: aiding noise widened for an autopilot's own attitude
-    /// estimate and consumer GNSS, IMU noise measured on the log.
-    Flight,
-    /// `Sim` when the file has truth columns (`fault_imu0_*`), else `Flight`.
-    Auto,
-}
-
-/// Options of [`replay`] beyond the files.
-#[derive(Debug, Clone)]
-pub struct ReplayOptions {
-    /// With truth: seconds after a fault during which flags count neither as
-    /// false alarms nor as detections (the window is flushing).
-    pub grace_s: f64,
-    /// Rows before this time are ignored (start the monitor in flight).
-    pub from_s: Option<f64>,
-    /// Rows after this time are ignored.
-    pub to_s: Option<f64>,
-    /// Faults to inject, and the IMU instance they go on.
-    pub inject: Option<(crate::eval::inject::FaultTable, usize)>,
-    /// Seed of injected noise.
-    pub seed: u64,
-    /// Tuning.
-    pub profile: Profile,
-    /// Learning phase, s (None: the profile's).
-    pub learn_s: Option<f64>,
-    /// Flight profile: GNSS (or DVL) velocity σ, m/s.
-    pub vel_sigma: f64,
-    /// Flight profile: attitude σ (roll, pitch, yaw), rad.
-    pub att_sigma: [f64; 3],
-    /// The monitor to run on every IMU.
-    pub monitor: MonitorKind,
-    /// Bound of the learned innovation inflation (UKF monitor; 1 disables;
-    /// None: 25 for the flight profile, 1 for the simulated one).
-    pub max_inflation: Option<f64>,
-}
-
-impl Default for ReplayOptions {
-    fn default() -> Self {
-        let deg = core::f64::consts::PI / 180.0;
-        Self {
-            grace_s: 4.4,
-            from_s: None,
-            to_s: None,
-            inject: None,
-            seed: 1,
-            profile: Profile::Auto,
-            learn_s: None,
-            vel_sigma: 0.3,
-            att_sigma: [1.0 * deg, 1.0 * deg, 10.0 * deg],
-            monitor: MonitorKind::Ukf,
-            max_inflation: None,
-        }
-    }
-}
+pub use super::replay_options::{AidingDelay, Profile, ReplayOptions};
 
 /// One input row.
 struct Row {
@@ -340,7 +281,48 @@ pub fn replay_observed(
     };
     sum.profile = format!("{profile:?}");
     let mut monitors = Vec::new();
+    // Per IMU, the velocity aiding's lag in rows (see `velocity_delay`).
+    let mut vel_lag = Vec::new();
     for k in 0..imu_idx.len() {
+        let lag = match opts.velocity_delay {
+            AidingDelay::Fixed(d) => (d / dt).round().max(0.0) as usize,
+            AidingDelay::Auto => {
+                // The fit compares NED velocity changes with the specific
+                // force rotated by the attitude: a DVL's body-frame
+                // velocity is another model.
+                if kind != AidingKind::GnssAttitude {
+                    bail!(
+                        "{}: --velocity-delay auto needs GNSS velocity (NED) and attitude aiding; \
+                         give a DVL's latency in seconds",
+                        input.display()
+                    );
+                }
+                let probe = sim_cfg(kind);
+                let t0 = rows.first().map_or(0.0, |r| r.t);
+                let span = probe.converge_s + opts.learn_s.unwrap_or(probe.learn_s.max(20.0));
+                let head: Vec<&Row> = rows.iter().take_while(|r| r.t < t0 + span).collect();
+                let avail3 = |r: &Row, o: usize| {
+                    let ok = r.avail.iter().skip(o).take(3).all(|a| *a);
+                    ok.then(|| core::array::from_fn(|i| r.z.get(o + i).copied().unwrap_or(0.0)))
+                };
+                let fit = super::gnss_lag::estimate(
+                    &head.iter().map(|r| r.t).collect::<Vec<_>>(),
+                    &head
+                        .iter()
+                        .map(|r| r.imus.get(k).copied().unwrap_or([f64::NAN; 6]))
+                        .collect::<Vec<_>>(),
+                    &head.iter().map(|r| avail3(r, 0)).collect::<Vec<_>>(),
+                    &head.iter().map(|r| avail3(r, 3)).collect::<Vec<_>>(),
+                    (0.5 / dt).round() as usize,
+                );
+                if let Some(l) = fit {
+                    sum.velocity_fit_rms_m_s.push(l.rms_m_s);
+                }
+                fit.map_or(0, |l| l.rows)
+            }
+        };
+        sum.velocity_delay_s.push(lag as f64 * dt);
+        vel_lag.push(lag);
         let mut cfg = match profile {
             Profile::Flight => {
                 let probe = sim_cfg(kind);
@@ -366,6 +348,20 @@ pub fn replay_observed(
             }
         };
         cfg.aiding = kind;
+        match opts.aiding_delay {
+            AidingDelay::Fixed(d) => cfg.aiding_delay_s = d,
+            AidingDelay::Auto => cfg.estimate_aiding_delay = true,
+        }
+        cfg.estimate_heading_offset = opts.estimate_heading_offset;
+        if opts.monitor == MonitorKind::Otsukf
+            && (opts.aiding_delay != AidingDelay::Fixed(0.0) || opts.estimate_heading_offset)
+        {
+            bail!(
+                "{}: the aiding delay and heading offset are the UKF monitor's \
+                 (--monitor ukf); the OTSUKF fuses aiding on arrival",
+                input.display()
+            );
+        }
         if k == 0 {
             sum.process_noise_psd = cfg.process_noise.psd.iter().copied().collect();
             sum.meas_sigma = cfg.meas_sigma.iter().copied().collect();
@@ -429,9 +425,27 @@ pub fn replay_observed(
         let t = row.t;
         let step_dt = prev_t.map_or(dt, |p| t - p);
         prev_t = Some(t);
-        let meas = Measurement {
-            z: MeasVec::from_iterator(row.z.iter().copied()),
-            available: row.avail,
+        // Per IMU: the attitude of this row, the velocity sample that
+        // describes this row (logged `lag` rows later).
+        let meas_for = |lag: usize| {
+            let mut m = Measurement {
+                z: MeasVec::from_iterator(row.z.iter().copied()),
+                available: row.avail,
+            };
+            for i in 0..3 {
+                let later = rows.get(row_index + lag);
+                let (z, a) = later.map_or((0.0, false), |r| {
+                    (
+                        r.z.get(i).copied().unwrap_or(0.0),
+                        r.avail.get(i).copied().unwrap_or(false),
+                    )
+                });
+                if let (Some(mz), Some(ma)) = (m.z.get_mut(i), m.available.get_mut(i)) {
+                    *mz = z;
+                    *ma = a;
+                }
+            }
+            m
         };
         let mut record = vec![format!("{t}")];
         let mut cells = Vec::new();
@@ -440,7 +454,11 @@ pub fn replay_observed(
             .enumerate()
             .map(|(k, m)| {
                 let imu = ImuVec::from_iterator(row.imus.get(k).copied().unwrap_or([f64::NAN; 6]));
-                m.step(&imu, step_dt, &meas)
+                m.step(
+                    &imu,
+                    step_dt,
+                    &meas_for(vel_lag.get(k).copied().unwrap_or(0)),
+                )
             })
             .collect();
         let raised = |r: &imu_fdi::monitor::Report<f64, _>, i: usize| {
@@ -514,8 +532,16 @@ pub fn replay_observed(
                     }
                 }
             }
-            if let (Some(inf), true) = (r.detail.innovation_inflation, row_is_last) {
-                sum.innovation_inflation.push(inf);
+            if row_is_last {
+                if let Some(inf) = r.detail.innovation_inflation {
+                    sum.innovation_inflation.push(inf);
+                }
+                if let Some(d) = r.detail.aiding_delay_s {
+                    sum.aiding_delay_s.push(d);
+                }
+                if let Some(h) = r.detail.heading_offset_rad {
+                    sum.heading_offset_deg.push(h.to_degrees());
+                }
             }
             cells.push((r.phase, r.status, r.fault_estimate, r.detail.fault_sigma));
         }
@@ -552,6 +578,17 @@ pub fn replay_observed(
         }
     }
     sum.imus = imu_idx.len();
+    if opts.monitor == MonitorKind::Ukf {
+        sum.aiding_delay_mode = Some(match opts.aiding_delay {
+            AidingDelay::Fixed(_) => "fixed".into(),
+            AidingDelay::Auto => "auto".into(),
+        });
+    }
+    sum.heading_offset_estimated = opts.estimate_heading_offset;
+    sum.velocity_delay_mode = match opts.velocity_delay {
+        AidingDelay::Fixed(_) => "fixed".into(),
+        AidingDelay::Auto => "auto".into(),
+    };
     sum.span_s = (
         rows.first().map_or(0.0, |r| r.t),
         rows.last().map_or(0.0, |r| r.t),

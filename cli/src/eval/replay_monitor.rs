@@ -28,6 +28,14 @@ pub struct ReplayDetail {
     /// Innovation and its variance `S_ii` per aiding channel at the last
     /// update, NaN where the channel was absent (UKF monitor).
     pub innovations: Option<[(f64, f64); 6]>,
+    /// The aiding latency the monitor fuses at, s: the configured one or
+    /// the online estimate (UKF monitor;
+    /// [`UkfMonitor::aiding_delay_estimate`]).
+    pub aiding_delay_s: Option<f64>,
+    /// The heading offset of the attitude aiding learnt so far, rad (UKF
+    /// monitor; 0 unless estimated;
+    /// [`UkfMonitor::heading_offset_estimate`]).
+    pub heading_offset_rad: Option<f64>,
 }
 
 /// One monitor of either kind.
@@ -60,18 +68,26 @@ impl ReplayMonitor {
         aiding: &Measurement<f64>,
     ) -> Report<f64, ReplayDetail> {
         match self {
-            Self::Ukf(m) => m.step(imu, dt, aiding).map_detail(|d| ReplayDetail {
-                fault_sigma: None,
-                innovation_inflation: Some(d.innovation_inflation),
-                innovations: Some(core::array::from_fn(|i| match d.diag.get(i) {
-                    Some(c) if c.available => (c.innovation, c.variance),
-                    _ => (f64::NAN, f64::NAN),
-                })),
-            }),
+            Self::Ukf(m) => {
+                let r = m.step(imu, dt, aiding);
+                let (delay, heading) = (m.aiding_delay_estimate(), m.heading_offset_estimate());
+                r.map_detail(|d| ReplayDetail {
+                    fault_sigma: None,
+                    aiding_delay_s: Some(delay),
+                    heading_offset_rad: Some(heading),
+                    innovation_inflation: Some(d.innovation_inflation),
+                    innovations: Some(core::array::from_fn(|i| match d.diag.get(i) {
+                        Some(c) if c.available => (c.innovation, c.variance),
+                        _ => (f64::NAN, f64::NAN),
+                    })),
+                })
+            }
             Self::Otsukf(m) => m.step(imu, dt, aiding).map_detail(|d| ReplayDetail {
                 fault_sigma: Some(d.fault_sigma),
                 innovation_inflation: None,
                 innovations: None,
+                aiding_delay_s: None,
+                heading_offset_rad: None,
             }),
         }
     }

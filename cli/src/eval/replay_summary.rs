@@ -94,4 +94,29 @@ pub struct ReplaySummary {
     /// OTSUKF).
     #[serde(rename = "innovation_inflation_factor")]
     pub innovation_inflation: Vec<[f64; 6]>,
+    /// How the UKF monitor's aiding latency was set: `fixed`
+    /// (`--aiding-delay SECONDS`, default 0) or `auto` (estimated online);
+    /// `None` for the OTSUKF, which fuses aiding on arrival.
+    pub aiding_delay_mode: Option<String>,
+    /// Per IMU, the aiding latency the UKF monitor fused at on the last
+    /// row, s: the configured value, or with `--aiding-delay auto` the
+    /// online estimate (empty for the OTSUKF).
+    pub aiding_delay_s: Vec<f64>,
+    /// Whether the heading offset of the attitude aiding was estimated
+    /// (`--heading-offset auto`).
+    pub heading_offset_estimated: bool,
+    /// Per IMU, the heading offset the UKF monitor took off the yaw aiding
+    /// on the last row, degrees (0 unless estimated; empty for the OTSUKF).
+    pub heading_offset_deg: Vec<f64>,
+    /// How the velocity aiding's own latency was set: `fixed`
+    /// (`--velocity-delay SECONDS`, default 0) or `auto` (fitted on each
+    /// IMU's learning span, `imu_fdi_cli::eval::gnss_lag`).
+    pub velocity_delay_mode: String,
+    /// Per IMU, that latency, s (a multiple of the IMU period).
+    pub velocity_delay_s: Vec<f64>,
+    /// Per IMU, with `--velocity-delay auto`: RMS of the fit's residual
+    /// velocity change between consecutive aiding samples at that lag, m/s
+    /// (two aiding errors and the IMU's integration error over one
+    /// interval).
+    pub velocity_fit_rms_m_s: Vec<f64>,
 }

@@ -31,7 +31,22 @@ struct KnownLayout {
     signs: [f64; 6],
 }
 
-const KNOWN_LAYOUTS: [KnownLayout; 3] = [
+const KNOWN_LAYOUTS: [KnownLayout; 4] = [
+    // SPEC §10 IMU columns (e.g. `tests/data/ap_log171_3imu.csv`), given with
+    // separate GNSS velocity and attitude files.
+    KnownLayout {
+        names: [
+            "imu{k}_ax",
+            "imu{k}_ay",
+            "imu{k}_az",
+            "imu{k}_gx",
+            "imu{k}_gy",
+            "imu{k}_gz",
+        ],
+        accel_scale: 1.0,
+        gyro_scale: 1.0,
+        signs: [1.0; 6],
+    },
     // ArduPilot log171 extract: one or more IMUs.
     KnownLayout {
         names: [
@@ -134,8 +149,8 @@ fn time_column(headers: &csv::StringRecord, path: &Path) -> Result<usize> {
 
 /// Maps the CSV extracts of `../shared/data` (names, degrees, quaternions,
 /// fix flags; see its `SOURCES.md`) to a SPEC §10 CSV: an IMU file
-/// (`imu{k}_gyro_x_rad_s …`, `gyro_x_rad_s …`, or x-io's g and deg/s with z
-/// up), optionally a GNSS file (`vel_n_m_s …`, kept where `fix_status` or
+/// (`imu{k}_gyro_x_rad_s …`, `gyro_x_rad_s …`, x-io's g and deg/s with z
+/// up, or SPEC §10's own `imu{k}_ax …` with `t`), optionally a GNSS file (`vel_n_m_s …`, kept where `fix_status` or
 /// `fix_type` ≥ 3 and `vel_ned_valid` ≠ 0) and an attitude file (`q_w …`
 /// body→NED, or `roll_deg …`). Aiding goes on the first IMU row at or after
 /// its time.
@@ -149,7 +164,7 @@ pub fn csv_extracts_to_replay_csv(
     let ti = time_column(&h, imu)?;
     let layout = imu_layout(&h).with_context(|| {
         format!(
-            "{}: unknown IMU columns (expected imu0_gyro_x_rad_s…, gyro_x_rad_s… or x-io's 'Gyroscope X (deg/s)'…)",
+            "{}: unknown IMU columns (expected imu0_ax…, imu0_gyro_x_rad_s…, gyro_x_rad_s… or x-io's 'Gyroscope X (deg/s)'…)",
             imu.display()
         )
     })?;

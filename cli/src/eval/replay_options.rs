@@ -1,0 +1,95 @@
+//! The options of a SPEC §10 replay ([`super::replay::replay`]): tuning
+//! profile, learning, aiding noise and latencies, the monitor.
+
+use super::replay_monitor::MonitorKind;
+
+/// How the monitor is tuned for a replay.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Profile {
+    /// The built-in scenarios' tuning (S2 for DVL aiding, S3 for GNSS):
+    /// for simulated runs written by `simulate`.
+    Sim,
+    /// A real flight: aiding noise widened for an autopilot's own attitude
+    /// estimate and consumer GNSS, IMU noise measured on the log.
+    Flight,
+    /// `Sim` when the file has truth columns (`fault_imu0_*`), else `Flight`.
+    Auto,
+}
+
+/// Options of [`replay`](super::replay::replay) beyond the files.
+#[derive(Debug, Clone)]
+pub struct ReplayOptions {
+    /// With truth: seconds after a fault during which flags count neither as
+    /// false alarms nor as detections (the window is flushing).
+    pub grace_s: f64,
+    /// Rows before this time are ignored (start the monitor in flight).
+    pub from_s: Option<f64>,
+    /// Rows after this time are ignored.
+    pub to_s: Option<f64>,
+    /// Faults to inject, and the IMU instance they go on.
+    pub inject: Option<(crate::eval::inject::FaultTable, usize)>,
+    /// Seed of injected noise.
+    pub seed: u64,
+    /// Tuning.
+    pub profile: Profile,
+    /// Learning phase, s (None: the profile's).
+    pub learn_s: Option<f64>,
+    /// Flight profile: GNSS (or DVL) velocity σ, m/s.
+    pub vel_sigma: f64,
+    /// Flight profile: attitude σ (roll, pitch, yaw), rad.
+    pub att_sigma: [f64; 3],
+    /// The monitor to run on every IMU.
+    pub monitor: MonitorKind,
+    /// Bound of the learned innovation inflation (UKF monitor; 1 disables;
+    /// None: 25 for the flight profile, 1 for the simulated one).
+    pub max_inflation: Option<f64>,
+    /// Aiding latency (UKF monitor): fixed, or estimated online.
+    pub aiding_delay: AidingDelay,
+    /// Estimate the attitude aiding's heading offset online (UKF monitor).
+    pub estimate_heading_offset: bool,
+    /// Latency of the velocity aiding alone (GNSS or DVL columns), fixed or
+    /// learned on each IMU's learning span ([`super::gnss_lag`]); either
+    /// monitor. The replay fuses each velocity sample at the row it
+    /// describes (the log is at hand: the offline equivalent of delayed
+    /// fusion at a known lag).
+    pub velocity_delay: AidingDelay,
+}
+
+/// How the UKF monitor treats the aiding's latency
+/// ([`imu_fdi::monitor::UkfMonitorConfig::aiding_delay_s`],
+/// [`imu_fdi::monitor::UkfMonitorConfig::estimate_aiding_delay`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AidingDelay {
+    /// A known latency, s (0: fused on arrival).
+    Fixed(f64),
+    /// Estimated online from the attitude aiding's changes, starting at 0.
+    Auto,
+}
+
+impl Default for AidingDelay {
+    fn default() -> Self {
+        Self::Fixed(0.0)
+    }
+}
+
+impl Default for ReplayOptions {
+    fn default() -> Self {
+        let deg = core::f64::consts::PI / 180.0;
+        Self {
+            grace_s: 4.4,
+            from_s: None,
+            to_s: None,
+            inject: None,
+            seed: 1,
+            profile: Profile::Auto,
+            learn_s: None,
+            vel_sigma: 0.3,
+            att_sigma: [1.0 * deg, 1.0 * deg, 10.0 * deg],
+            monitor: MonitorKind::Ukf,
+            max_inflation: None,
+            aiding_delay: AidingDelay::default(),
+            estimate_heading_offset: false,
+            velocity_delay: AidingDelay::default(),
+        }
+    }
+}
