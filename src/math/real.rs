@@ -79,3 +79,50 @@ impl Real for f32 {
         0.1
     }
 }
+
+/// True when no element is NaN or infinite.
+///
+/// `x·0` is ±0 for every finite `x` and NaN for ±∞ and NaN, and a NaN
+/// survives every sum, so the sum of `x·0` is zero exactly when all are
+/// finite: one multiply and one add per element, without the compare and
+/// branch per element of `iter().all(finite)` (the filters check 42 values
+/// per step; issue 17). Same answer for every input (tested).
+pub(crate) fn all_finite<T: Real>(v: &[T]) -> bool {
+    let mut acc = T::zero();
+    for x in v {
+        acc += *x * T::zero();
+    }
+    acc == T::zero()
+}
+
+#[cfg(test)]
+mod all_finite_tests {
+    use super::all_finite;
+
+    #[test]
+    fn agrees_with_the_element_test() {
+        let specials = [
+            0.0f32,
+            -0.0,
+            1.0,
+            -3.0e38,
+            f32::MAX,
+            f32::MIN_POSITIVE,
+            1e-45,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        for a in specials {
+            for b in specials {
+                for c in specials {
+                    let v = [a, b, c];
+                    assert_eq!(all_finite(&v), v.iter().all(|x| x.is_finite()), "{v:?}");
+                    let w = [f64::from(a), f64::from(b), f64::from(c)];
+                    assert_eq!(all_finite(&w), w.iter().all(|x| x.is_finite()), "{w:?}");
+                }
+            }
+        }
+        assert!(all_finite::<f32>(&[]));
+    }
+}

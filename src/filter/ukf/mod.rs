@@ -5,6 +5,7 @@ use nalgebra::{SMatrix, SVector};
 use super::{ChannelDiag, Gate, SigmaParams, SigmaWeights};
 
 mod split;
+pub(crate) use crate::math::all_finite;
 use crate::math::{
     add_outer_lower, cholesky, cholesky_solve_right, is_identity, mirror_lower, symmetrize,
     wrap_pi, LinalgError, Real,
@@ -90,12 +91,6 @@ fn diff<T: Real, const K: usize>(
         }
     }
     d
-}
-
-/// True when no element is NaN or infinite (over the contiguous storage:
-/// a plain loop, where nalgebra's element iterator walks strides).
-pub(crate) fn all_finite<T: Real>(v: &[T]) -> bool {
-    v.iter().all(|x| x.finite())
 }
 
 fn weighted_mean<T: Real, const K: usize, const S: usize>(
