@@ -158,7 +158,9 @@ mod tests {
 /// not finite; the caller then evaluates the functions directly.
 #[inline]
 pub fn shift_sin_cos<T: Real>(s: T, c: T, d: T) -> Option<(T, T)> {
-    if d.abs() > T::small_angle() || !d.finite() {
+    // `|d| ≤ small` fails for NaN and ±∞ as well: one FPU compare for the
+    // range and the finiteness (issue 17).
+    if !(d.abs() <= T::small_angle()) {
         return None;
     }
     let d2 = d * d;
