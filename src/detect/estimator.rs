@@ -30,64 +30,43 @@ pub fn estimate_as_written<T: Real>(
 /// on copies (a fixed 6×6 kernel: about 70 % of the instructions of nalgebra's
 /// generic LU on the Cortex-M4F). `None` when a pivot is zero or the result
 /// is not finite.
-///
-/// The elimination steps are called with literal column indices so that
-/// every loop bound is a constant after inlining: straight-line code where a
-/// loop over `k` with nalgebra's checked row swaps cost ≈ 1,600 instructions
-/// per solve on the M4F (issue 17). The operations and their order are those
-/// of the loop, so the result is the same to the bit (tested).
 fn solve_pivoted<T: Real>(mut a: Mat6<T>, mut b: ImuVec<T>) -> Option<ImuVec<T>> {
-    let (c, v) = (&mut a.data.0, &mut b.data.0[0]);
-    eliminate(c, v, 0)?;
-    eliminate(c, v, 1)?;
-    eliminate(c, v, 2)?;
-    eliminate(c, v, 3)?;
-    eliminate(c, v, 4)?;
-    eliminate(c, v, 5)?;
+    for k in 0..6 {
+        let mut p = k;
+        let mut best = a[(k, k)].abs();
+        for i in (k + 1)..6 {
+            let v = a[(i, k)].abs();
+            if v > best {
+                best = v;
+                p = i;
+            }
+        }
+        if best <= T::zero() || !best.finite() {
+            return None;
+        }
+        if p != k {
+            a.swap_rows(p, k);
+            b.swap_rows(p, k);
+        }
+        let inv = T::one() / a[(k, k)];
+        for i in (k + 1)..6 {
+            let f = a[(i, k)] * inv;
+            for j in (k + 1)..6 {
+                let akj = a[(k, j)];
+                a[(i, j)] -= f * akj;
+            }
+            let bk = b[k];
+            b[i] -= f * bk;
+        }
+    }
     for k in (0..6).rev() {
-        let mut s = v[k];
+        let mut s = b[k];
         for j in (k + 1)..6 {
-            s -= c[j][k] * v[j];
+            s -= a[(k, j)] * b[j];
         }
-        v[k] = s / c[k][k];
+        b[k] = s / a[(k, k)];
     }
-    b.iter().all(|x| x.finite()).then_some(b)
-}
-
-/// Step `k` of [`solve_pivoted`] on the column-major array `c` (entry
-/// `(i, j)` is `c[j][i]`) and the right-hand side `v`: the pivot search
-/// down column `k`, the row swap, the elimination below the pivot. `k < 6`.
-#[inline(always)]
-fn eliminate<T: Real>(c: &mut [[T; 6]; 6], v: &mut [T; 6], k: usize) -> Option<()> {
-    let mut p = k;
-    let mut best = c[k][k].abs();
-    for i in (k + 1)..6 {
-        let x = c[k][i].abs();
-        if x > best {
-            best = x;
-            p = i;
-        }
-    }
-    if best <= T::zero() || !best.finite() {
-        return None;
-    }
-    if p != k {
-        for col in c.iter_mut() {
-            col.swap(p, k);
-        }
-        v.swap(p, k);
-    }
-    let inv = T::one() / c[k][k];
-    for i in (k + 1)..6 {
-        let f = c[k][i] * inv;
-        for j in (k + 1)..6 {
-            let akj = c[j][k];
-            c[j][i] -= f * akj;
-        }
-        let bk = v[k];
-        v[i] -= f * bk;
-    }
-    Some(())
+    b.iter().all(|v| v.finite()).then_some(b)
 }
 
 /// The corrected mapping `f̂ = M⁺ r̄`, as weighted least squares with the
@@ -137,69 +116,6 @@ pub fn estimate_corrected<T: Real>(
 
 #[cfg(test)]
 mod tests {
-
-    /// The former loop over `k` (nalgebra indexing and row swaps).
-    fn solve_pivoted_loop(mut a: Mat6<f32>, mut b: ImuVec<f32>) -> Option<ImuVec<f32>> {
-        for k in 0..6 {
-            let mut p = k;
-            let mut best = a[(k, k)].abs();
-            for i in (k + 1)..6 {
-                let v = a[(i, k)].abs();
-                if v > best {
-                    best = v;
-                    p = i;
-                }
-            }
-            if best <= 0.0 || !best.is_finite() {
-                return None;
-            }
-            if p != k {
-                a.swap_rows(p, k);
-                b.swap_rows(p, k);
-            }
-            let inv = 1.0 / a[(k, k)];
-            for i in (k + 1)..6 {
-                let f = a[(i, k)] * inv;
-                for j in (k + 1)..6 {
-                    let akj = a[(k, j)];
-                    a[(i, j)] -= f * akj;
-                }
-                let bk = b[k];
-                b[i] -= f * bk;
-            }
-        }
-        for k in (0..6).rev() {
-            let mut s = b[k];
-            for j in (k + 1)..6 {
-                s -= a[(k, j)] * b[j];
-            }
-            b[k] = s / a[(k, k)];
-        }
-        b.iter().all(|v| v.is_finite()).then_some(b)
-    }
-
-    #[test]
-    fn unrolled_solve_is_bit_identical_to_the_loop() {
-        let mut seed = 0x9e37_79b9_u64;
-        let mut next = || {
-            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
-            ((seed >> 40) as f32 / (1u64 << 24) as f32) - 0.5
-        };
-        for trial in 0..500 {
-            let mut a = Mat6::<f32>::from_fn(|_, _| next());
-            if trial % 7 == 0 {
-                a.set_column(trial % 6, &ImuVec::zeros()); // singular
-            }
-            let b = ImuVec::<f32>::from_fn(|_, _| next());
-            let (x, y) = (solve_pivoted(a, b), solve_pivoted_loop(a, b));
-            assert_eq!(x.is_some(), y.is_some(), "trial {trial}");
-            if let (Some(x), Some(y)) = (x, y) {
-                for (p, q) in x.iter().zip(y.iter()) {
-                    assert_eq!(p.to_bits(), q.to_bits(), "trial {trial}");
-                }
-            }
-        }
-    }
     use super::*;
 
     #[test]

@@ -22,73 +22,35 @@ pub enum LinalgError {
 /// producing NaN.
 ///
 /// This is nalgebra's left-looking column algorithm (column `j` loses
-/// `l_jk ·` column `k` for every `k < j`, then is scaled by its pivot) with
-/// two changes: the pivot's square root is [`Real::sqrt_fast`] — the FPU's
-/// `vsqrt` on the Cortex-M4F — where `nalgebra::Cholesky` calls software
-/// `libm::sqrtf` (61 instructions each); and the loops run over the
-/// column-major array itself instead of nalgebra's column views, whose range
-/// checks and strided `axpy` kept the 6×6 factor at 462 instructions on the
-/// M4F (issue 17). Every entry sees the same operations in the same order as
-/// the view-based version (`y + (−l_jk)·x` is `y − l_jk·x` to the bit), so
-/// the factor is bit-identical to it (tested).
+/// `l_jk ·` column `k` for every `k < j`, as an `axpy` on column views, then
+/// is scaled by its pivot) with one change: the pivot's square root is
+/// [`Real::sqrt_fast`] — the FPU's `vsqrt` on the Cortex-M4F — where
+/// `nalgebra::Cholesky` calls software `libm::sqrtf` (61 instructions each).
+/// The views' ranges are bounded by the loop indices (`k < j < N`), so
+/// nalgebra's range assertions cannot fire.
 pub fn cholesky<T: Real, const N: usize>(
     a: &SMatrix<T, N, N>,
 ) -> Result<SMatrix<T, N, N>, LinalgError> {
     let mut l = *a;
-    let c = &mut l.data.0; // the columns
-    if N == 6 {
-        // Literal column indices: after inlining every loop bound is a
-        // constant, so the 6×6 factor is straight-line code (the filters'
-        // size; a loop over `j` is not unrolled by the compiler).
-        factor_column(c, 0)?;
-        factor_column(c, 1)?;
-        factor_column(c, 2)?;
-        factor_column(c, 3)?;
-        factor_column(c, 4)?;
-        factor_column(c, 5)?;
-    } else {
-        for j in 0..N {
-            factor_column(c, j)?;
+    for j in 0..N {
+        for k in 0..j {
+            let factor = -l[(j, k)];
+            let (mut col_j, col_k) = l.columns_range_pair_mut(j, k);
+            col_j
+                .rows_range_mut(j..)
+                .axpy(factor, &col_k.rows_range(j..), T::one());
         }
-    }
-    // The upper triangle: zero (it held `a`'s).
-    for (j, col) in c.iter_mut().enumerate() {
-        for v in col.iter_mut().take(j) {
-            *v = T::zero();
+        let d = l[(j, j)];
+        if d <= T::zero() || !d.finite() {
+            return Err(LinalgError::NotPositiveDefinite(j));
         }
+        let s = d.sqrt_fast();
+        l[(j, j)] = s;
+        let inv = T::one() / s;
+        l.view_range_mut(j + 1.., j).scale_mut(inv);
     }
+    l.fill_upper_triangle(T::zero(), 1);
     Ok(l)
-}
-
-/// Column `j` of the left-looking factorisation, columns `0..j` being
-/// final: `l_ij −= l_jk l_ik` for `k < j`, then the pivot's root and the
-/// scaling by its reciprocal. `j < N` (every caller).
-#[inline(always)]
-fn factor_column<T: Real, const N: usize>(
-    c: &mut [[T; N]; N],
-    j: usize,
-) -> Result<(), LinalgError> {
-    for k in 0..j {
-        let f = c[k][j];
-        for i in j..N {
-            let y = c[j][i] - f * c[k][i];
-            c[j][i] = y;
-        }
-    }
-    let d = c[j][j];
-    // `0 < d < ∞` is `d > 0 && finite(d)` (NaN fails both compares) in two
-    // FPU compares instead of an integer test of the bits.
-    if !(d > T::zero() && d < T::lit(f64::INFINITY)) {
-        return Err(LinalgError::NotPositiveDefinite(j));
-    }
-    let s = d.sqrt_fast();
-    c[j][j] = s;
-    let inv = T::one() / s;
-    for i in (j + 1)..N {
-        let y = c[j][i] * inv;
-        c[j][i] = y;
-    }
-    Ok(())
 }
 
 /// Adds `w·d·dᵀ` to the lower triangle of `p` (the upper triangle is left
@@ -224,58 +186,6 @@ mod tests {
         for i in 0..6 {
             for j in (i + 1)..6 {
                 assert_eq!(l[(i, j)], 0.0, "upper ({i},{j})");
-            }
-        }
-    }
-
-    /// The former view-based loop (nalgebra `axpy` on column views).
-    fn cholesky_views<T: Real, const N: usize>(a: &SMatrix<T, N, N>) -> Option<SMatrix<T, N, N>> {
-        let mut l = *a;
-        for j in 0..N {
-            for k in 0..j {
-                let factor = -l[(j, k)];
-                let (mut col_j, col_k) = l.columns_range_pair_mut(j, k);
-                col_j
-                    .rows_range_mut(j..)
-                    .axpy(factor, &col_k.rows_range(j..), T::one());
-            }
-            let d = l[(j, j)];
-            if d <= T::zero() || !d.finite() {
-                return None;
-            }
-            let s = d.sqrt_fast();
-            l[(j, j)] = s;
-            let inv = T::one() / s;
-            l.view_range_mut(j + 1.., j).scale_mut(inv);
-        }
-        l.fill_upper_triangle(T::zero(), 1);
-        Some(l)
-    }
-
-    #[test]
-    fn array_loop_is_bit_identical_to_the_view_based_one() {
-        // Random SPD 6×6 (f32 and f64): B Bᵀ + εI from a fixed LCG.
-        let mut seed = 0x2545_f491_u64;
-        let mut next = || {
-            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
-            ((seed >> 33) as f64 / (1u64 << 31) as f64) - 0.5
-        };
-        for trial in 0..200 {
-            let b = nalgebra::SMatrix::<f64, 6, 6>::from_fn(|_, _| next());
-            let eps = if trial % 2 == 0 { 1e-3 } else { 1e-9 };
-            let a = b * b.transpose() + nalgebra::SMatrix::<f64, 6, 6>::identity() * eps;
-            let a32 = a.map(|v| v as f32);
-            assert_eq!(cholesky(&a).ok(), cholesky_views(&a), "f64 trial {trial}");
-            assert_eq!(
-                cholesky(&a32).ok(),
-                cholesky_views(&a32),
-                "f32 trial {trial}"
-            );
-            let (x, y) = (cholesky(&a32).ok(), cholesky_views(&a32));
-            if let (Some(x), Some(y)) = (x, y) {
-                for (p, q) in x.iter().zip(y.iter()) {
-                    assert_eq!(p.to_bits(), q.to_bits(), "f32 trial {trial}");
-                }
             }
         }
     }
