@@ -19,6 +19,7 @@ pub use cholesky::{
 pub use identity::is_identity;
 pub use inverse::try_inverse;
 pub use jacobi::symmetric_eigen;
+pub(crate) use real::all_finite;
 pub use real::Real;
 pub use sqrt::sqrt_f32;
 pub use trig::{shift_sin_cos, sin_cos_f32};

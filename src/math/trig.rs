@@ -157,8 +157,12 @@ mod tests {
 /// two polynomials). `None` when `|d|` exceeds [`Real::small_angle`] or is
 /// not finite; the caller then evaluates the functions directly.
 #[inline]
+// The negated compare is the point: NaN must fail the range test too.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub fn shift_sin_cos<T: Real>(s: T, c: T, d: T) -> Option<(T, T)> {
-    if d.abs() > T::small_angle() || !d.finite() {
+    // `|d| ≤ small` fails for NaN and ±∞ as well: one FPU compare for the
+    // range and the finiteness (issue 17).
+    if !(d.abs() <= T::small_angle()) {
         return None;
     }
     let d2 = d * d;

@@ -182,7 +182,7 @@ impl<T: Real> VehicleModel<T> {
         let mut next = x + k2 * dt;
         next[ROLL] = wrap_pi(next[ROLL]);
         next[YAW] = wrap_pi(next[YAW]);
-        if next.iter().all(|v| v.finite()) {
+        if crate::math::all_finite(next.as_slice()) {
             Ok(next)
         } else {
             Err(ModelError::NonFinite)

@@ -96,7 +96,8 @@ pub trait PeriodicMonitor {
 
 impl<const W: usize> PeriodicMonitor for UkfMonitor<f32, W> {
     fn step_period(&mut self, imu: &ImuVec<f32>, dt: f32, aiding: &Measurement<f32>) -> Verdict {
-        Verdict::from(&self.step(imu, dt, aiding))
+        // By reference: no copy of the report per period (issue 17).
+        Verdict::from(self.step_ref(imu, dt, aiding))
     }
 }
 

@@ -169,7 +169,8 @@ fn main() -> ! {
         other_stack = other_stack.max(depth_below(sp));
         paint_below(sp);
         let t0 = instructions();
-        let r = monitor.step(&u, s.dt as f32, &m);
+        // By reference: the report stays in the monitor (no 320-byte copy).
+        let r = monitor.step_ref(&u, s.dt as f32, &m);
         let cost = instructions().wrapping_sub(t0).saturating_sub(overhead);
         step_stack = step_stack.max(depth_below(sp));
         if cost > all.max {
@@ -190,7 +191,7 @@ fn main() -> ! {
         } else {
             predict_only.add(cost);
         }
-        tally.record(&s, &r);
+        tally.record(&s, r);
     }
     hprintln!(
         "S2 seed 1 on the emulated Cortex-M4F (f32 monitor, {} steps)",

@@ -81,12 +81,15 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
                 }
             }
             let (plus, minus) = if k < nonlinear {
-                let yp = f(&(self.x + col)).map_err(UkfError::Model)?;
-                let ym = f(&(self.x - col)).map_err(UkfError::Model)?;
-                (
-                    diff(&yp, &reference, &self.angles),
-                    diff(&ym, &reference, &self.angles),
-                )
+                // One call site of `f` and of the inlined `diff` for both
+                // points (flash: one copy instead of two).
+                let mut pm = [self.x + col, self.x - col];
+                for y in pm.iter_mut() {
+                    let fy = f(y).map_err(UkfError::Model)?;
+                    *y = diff_inline(&fy, &reference, &self.angles);
+                }
+                let [yp, ym] = pm;
+                (yp, ym)
             } else {
                 let d = lin(&col);
                 (d, -d)
