@@ -139,3 +139,18 @@ impl<T: Real> MultiscaleConfig<T> {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_offset_limit_may_be_infinite_but_not_nan_or_zero() {
+        let ok = MultiscaleConfig::<f32>::new(0.1, f32::INFINITY);
+        assert_eq!(ok.check(40), Ok(()));
+        for bad in [f32::NAN, 0.0, -1.0] {
+            let c = MultiscaleConfig::<f32>::new(0.1, bad);
+            assert_eq!(c.check(40), Err("multiscale.offset_limit"), "{bad}");
+        }
+    }
+}
