@@ -168,17 +168,18 @@ fn injected_accelerometer_steps_are_isolated_at_the_measured_rates() {
         CRASH,
     )
     .unwrap();
-    // 0.3 m/s², measured: x 141/174, y 158/174, z 91/174 (the a_z
-    // vibration events above), 6 cases with a false alarm (most of them
+    // 0.3 m/s², measured: x 141/174, y 159/174, z 91/174 (the a_z
+    // vibration events above), 5 cases with a false alarm (most of them
     // alarms the step's own blocks raise right after it ends; 4 before the
-    // alarm confirmation and the decisions' 9-sample latency of issue 17).
+    // alarm confirmation and the decisions' 9-sample latency of issue 17,
+    // 6 before the accelerometers lost the power-up offset test).
     let axis = |a: usize| move |c: &StepCase| c.injection.channel == a;
     let (x, _) = passes(&cases, axis(0));
     let (y, _) = passes(&cases, axis(1));
     let (z, _) = passes(&cases, axis(2));
     assert!(x >= 140 && y >= 155 && z >= 90, "{x} {y} {z}");
     let fa = cases.iter().filter(|c| c.false_alarm).count();
-    assert!(fa <= 6, "{fa}");
+    assert!(fa <= 5, "{fa}");
     for imu in 0..3 {
         let (ok, _) = passes(&cases, |c| {
             c.injection.imu == imu && c.injection.channel < 2

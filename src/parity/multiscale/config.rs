@@ -54,9 +54,12 @@ pub struct MultiscaleConfig<T> {
     /// for the gyros it adds parameters and costs sensitivity, so their
     /// defaults leave it off.
     pub vibration: bool,
-    /// Largest relative bias one sensor may carry at the end of training
-    /// (after the turn-on calibration the autopilot applies); a larger one
-    /// is a fault present from power-up, reported instead of learned.
+    /// Largest relative bias one sensor may carry once trained (after the
+    /// turn-on calibration the autopilot applies); a larger one is a fault
+    /// present from power-up, reported instead of learned. Infinite: no
+    /// such test (the monitor cannot judge a fault present since power-up,
+    /// and says so in its documentation) — the accelerometer default, see
+    /// [`ParityConfig::accel_flight`](crate::parity::ParityConfig::accel_flight).
     pub offset_limit: T,
 }
 
@@ -90,8 +93,8 @@ impl<T: Real> MultiscaleConfig<T> {
 
     /// Checks every field: ascending non-zero scales within `w` blocks,
     /// α in (0, 0.5), finite positive margins, memories above one block,
-    /// `learn_below` in (0, 1], non-negative ridges and a positive offset
-    /// limit. Returns the name of the first bad field.
+    /// `learn_below` in (0, 1], non-negative ridges and a positive
+    /// (possibly infinite) offset limit. Returns the name of the first bad field.
     pub fn check(&self, w: usize) -> Result<(), &'static str> {
         let [a, b, c] = self.scales;
         if a == 0 || a > b || b > c || usize::from(c) > w {
@@ -128,9 +131,26 @@ impl<T: Real> MultiscaleConfig<T> {
         if !(self.ridge_vibration.finite() && self.ridge_vibration >= T::zero()) {
             return Err("multiscale.ridge_vibration");
         }
-        if !positive(self.offset_limit) {
+        // Infinite is allowed (no power-up test); NaN, zero and negative
+        // are not.
+        if self.offset_limit.partial_cmp(&T::zero()) != Some(core::cmp::Ordering::Greater) {
             return Err("multiscale.offset_limit");
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_offset_limit_may_be_infinite_but_not_nan_or_zero() {
+        let ok = MultiscaleConfig::<f32>::new(0.1, f32::INFINITY);
+        assert_eq!(ok.check(40), Ok(()));
+        for bad in [f32::NAN, 0.0, -1.0] {
+            let c = MultiscaleConfig::<f32>::new(0.1, bad);
+            assert_eq!(c.check(40), Err("multiscale.offset_limit"), "{bad}");
+        }
     }
 }

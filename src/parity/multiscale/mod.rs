@@ -392,6 +392,9 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// regression's intercept, which sits wherever the regressors are
     /// centred.
     pub fn offset_fault(&self, v: &SMatrix<T, N, N>, active: &[bool; N]) -> Option<(usize, T, T)> {
+        if !self.cfg.offset_limit.finite() {
+            return None;
+        }
         let count = self.sxx.get((0, 0)).copied().unwrap_or(T::zero());
         if count.partial_cmp(&T::one()) != Some(core::cmp::Ordering::Greater) {
             return None;
