@@ -251,11 +251,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         health.saturated = saturated;
         let elapsed = dt_use.unwrap_or(T::zero());
         self.stats_holdoff = (self.stats_holdoff - elapsed).max(T::zero());
-        for s in self
-            .since_seen
-            .iter_mut()
-            .chain(self.since_fused.iter_mut())
-        {
+        // Two loops, not one over a chained iterator: the compiler unrolls
+        // these, not the chain (issue 17).
+        for s in self.since_seen.iter_mut() {
+            *s += elapsed;
+        }
+        for s in self.since_fused.iter_mut() {
             *s += elapsed;
         }
 
