@@ -573,6 +573,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     #[inline(never)] // own stack frame and one copy (issue 17)
     fn compose(&mut self, imu: &ImuVec<T>, health: Health, updated: bool) {
         let r = &mut self.report;
+        // Only `update` writes the diagnostics, and only on a step that
+        // reports `updated`: after a step without one they are still the
+        // defaults this clears them to (a predict-only step skips the
+        // 120-byte store, issue 17).
+        let diag_stale = r.updated;
         r.phase = self.phase;
         if self.phase != Phase::Monitoring {
             r.status = [ChannelState::NotMonitored; NZ];
@@ -599,7 +604,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         r.corrected_imu = corrected;
         r.detail.covariance_resets = self.ukf.covariance_resets();
         r.detail.innovation_inflation = self.inflation;
-        if !updated {
+        if !updated && diag_stale {
             r.detail.diag = [ChannelDiag::default(); NZ];
         }
     }
