@@ -86,6 +86,36 @@ pub fn mirror_lower<T: Real, const N: usize>(p: &mut SMatrix<T, N, N>) {
     }
 }
 
+/// `dst` = `p` with its lower triangle mirrored onto the upper: the same
+/// values as [`mirror_lower`] on `p` followed by a copy into `dst`, in one
+/// pass (21 loads, 36 stores for 6×6 instead of 30 + 72; issue 17).
+pub(crate) fn mirror_lower_into<T: Real, const N: usize>(
+    p: &SMatrix<T, N, N>,
+    dst: &mut SMatrix<T, N, N>,
+) {
+    for j in 0..N {
+        for i in j..N {
+            let v = p[(i, j)];
+            dst[(i, j)] = v;
+            dst[(j, i)] = v;
+        }
+    }
+}
+
+/// True when every entry of the lower triangle (diagonal included) is
+/// finite: after [`mirror_lower`] the same answer as
+/// [`all_finite`](super::all_finite) over the whole matrix, on 21 values
+/// instead of 36 for 6×6 (issue 17). Same sum of `x·0` as `all_finite`.
+pub(crate) fn lower_finite<T: Real, const N: usize>(p: &SMatrix<T, N, N>) -> bool {
+    let mut acc = T::zero();
+    for j in 0..N {
+        for i in j..N {
+            acc += p[(i, j)] * T::zero();
+        }
+    }
+    acc == T::zero()
+}
+
 /// The textbook factorisation, kept to locate a failing pivot and as the
 /// reference the fast path is tested against.
 pub fn cholesky_reference<T: Real, const N: usize>(
@@ -159,6 +189,31 @@ pub fn symmetrize<T: Real, const N: usize>(a: &mut SMatrix<T, N, N>) {
 mod tests {
     use super::*;
     use nalgebra::Matrix3;
+
+    #[test]
+    fn mirror_into_and_lower_finite_match_mirror_and_all_finite() {
+        let mut p = nalgebra::Matrix4::<f32>::from_fn(|i, j| (i * 4 + j) as f32 * 0.37 - 2.0);
+        let mut dst = nalgebra::Matrix4::<f32>::from_element(9.0);
+        mirror_lower_into(&p, &mut dst);
+        let mut whole = p;
+        mirror_lower(&mut whole);
+        assert_eq!(dst, whole);
+        assert!(lower_finite(&p));
+        // Non-finite values above the diagonal are overwritten by the mirror.
+        p[(0, 3)] = f32::NAN;
+        p[(1, 2)] = f32::INFINITY;
+        assert!(lower_finite(&p));
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            for (i, j) in [(0, 0), (3, 0), (2, 1), (3, 3)] {
+                let mut q = p;
+                q[(i, j)] = bad;
+                let mut m = q;
+                mirror_lower(&mut m);
+                assert!(!lower_finite(&q));
+                assert_eq!(lower_finite(&q), crate::math::all_finite(m.as_slice()));
+            }
+        }
+    }
 
     #[test]
     fn factors_and_solves() {

@@ -276,7 +276,10 @@ impl<T: Real> VehicleModel<T> {
         Ok(self.jacobian_input_with(x, &t))
     }
 
-    fn jacobian_input_with(&self, x: &StateVec<T>, t: &Trig<T>) -> Mat6<T> {
+    /// [`jacobian_input`](Self::jacobian_input) at `x` with its attitude
+    /// trigonometry `t` ([`attitude_trig`](Self::attitude_trig)) known: the
+    /// same matrix as the second of [`jacobians`](Self::jacobians).
+    pub(crate) fn jacobian_input_with(&self, x: &StateVec<T>, t: &Trig<T>) -> Mat6<T> {
         let (vu, vv, vw) = (x[0], x[1], x[2]);
         let tan = t.sth / t.cth;
         let o = T::one();

@@ -6,6 +6,7 @@
 use nalgebra::{SMatrix, SVector};
 
 use super::*;
+use crate::math::{lower_finite, mirror_lower_into};
 
 impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
     /// [`factor`](Self::factor) of `P` with its states permuted into
@@ -193,12 +194,15 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         if offset_weight != T::zero() {
             add_outer_lower(&mut p, &offset, offset_weight);
         }
-        mirror_lower(&mut p);
-        if !(all_finite(mean.as_slice()) && all_finite(p.as_slice())) {
+        // The upper triangle is about to be the lower one mirrored: testing
+        // the lower triangle is testing the result. Then `P` is written
+        // once, mirrored on the way, instead of mirrored in place and
+        // copied (issue 17; the same values to the bit).
+        if !(all_finite(mean.as_slice()) && lower_finite(&p)) {
             return Err(UkfError::NonFinite);
         }
         self.x = mean;
-        self.p = p;
+        mirror_lower_into(&p, &mut self.p);
         self.condition();
         match failure {
             Some(e) => Err(UkfError::CovarianceReset(e)),

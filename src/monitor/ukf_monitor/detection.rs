@@ -144,7 +144,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             estimate_corrected(&m_eff, &weight, &rbar, &monitored).unwrap_or_else(ImuVec::zeros);
         let raw_mean = rbar.component_div(&scale.map(|s| if s > T::zero() { s } else { T::one() }));
         let mut as_written =
-            estimate_as_written(&self.last_h, &self.last_input_b, self.last_dt, &raw_mean)
+            estimate_as_written(&self.last_h, &self.last_input_b(), self.last_dt, &raw_mean)
                 .unwrap_or_else(ImuVec::zeros);
         for (v, m) in as_written.iter_mut().zip(monitored.iter()) {
             if !*m {

@@ -14,8 +14,8 @@ use crate::detect::{
 use crate::filter::{ChannelDiag, Gate, Ukf, UkfError};
 use crate::math::{try_inverse, Real};
 use crate::model::{
-    discrete_process_noise_structured, ImuVec, Mat6, Measurement, MeasurementModel, ModelError,
-    StateVec, VehicleModel, NX, NZ, ROLL, STATE_ANGLES,
+    discrete_process_noise_structured, AttitudeTrig, ImuVec, Mat6, Measurement, MeasurementModel,
+    ModelError, StateVec, VehicleModel, NX, NZ, ROLL, STATE_ANGLES,
 };
 use crate::stats::normal_upper_quantile;
 
@@ -87,7 +87,11 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     prev_imu: ImuVec<T>,
     frozen_count: u16,
     stats_holdoff: T,
-    last_input_b: Mat6<T>,
+    /// Where the last predict's input Jacobian `B` was taken (the state
+    /// before it and its attitude trigonometry): `B` is rebuilt from these
+    /// when an estimate needs it, instead of a 36-value copy every IMU
+    /// period (issue 17). `None` before the first predict: `B = I`.
+    last_input_at: Option<(StateVec<T>, AttitudeTrig<T>)>,
     last_h: Mat6<T>,
     last_dt: T,
     delay_steps: usize,
@@ -151,7 +155,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             prev_imu: ImuVec::zeros(),
             frozen_count: 0,
             stats_holdoff: T::zero(),
-            last_input_b: Mat6::identity(),
+            last_input_at: None,
             last_h: Mat6::identity(),
             last_dt: cfg.imu_period,
             delay_steps: (cfg.aiding_delay_s / cfg.imu_period).round().to_f64() as usize,
@@ -196,6 +200,16 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     pub fn aiding_delay_estimate(&self) -> T {
         T::lit(self.delay_steps as f64) * self.cfg.imu_period
     }
+    /// The input Jacobian `B` of the last predict (the identity before the
+    /// first), rebuilt from where it was taken: the same matrix `predict`
+    /// used.
+    fn last_input_b(&self) -> Mat6<T> {
+        match &self.last_input_at {
+            Some((x, t)) => self.model.jacobian_input_with(x, t),
+            None => Mat6::identity(),
+        }
+    }
+
     /// Clears latched fault decisions (explicit operator reset).
     pub fn reset_faults(&mut self) {
         self.persistence.reset();
@@ -251,11 +265,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         health.saturated = saturated;
         let elapsed = dt_use.unwrap_or(T::zero());
         self.stats_holdoff = (self.stats_holdoff - elapsed).max(T::zero());
-        for s in self
-            .since_seen
-            .iter_mut()
-            .chain(self.since_fused.iter_mut())
-        {
+        // Two loops, not one over a chained iterator: the compiler unrolls
+        // these, not the chain (issue 17).
+        for s in self.since_seen.iter_mut() {
+            *s += elapsed;
+        }
+        for s in self.since_fused.iter_mut() {
             *s += elapsed;
         }
 
@@ -383,7 +398,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // every update, while it saves a 6×6 product per IMU period.
         // X ← X + (A X + B) dt: one scaling by dt instead of two.
         self.sensitivity += (VehicleModel::mul_state_jacobian(&a, &self.sensitivity) + b) * dt;
-        self.last_input_b = b;
+        self.last_input_at = Some((x, trig));
         // The state history serves a configured or estimated aiding latency.
         if self.keeps_history() {
             self.history.write(*self.ukf.state());
@@ -572,6 +587,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     #[inline(never)] // own stack frame and one copy (issue 17)
     fn compose(&mut self, imu: &ImuVec<T>, health: Health, updated: bool) {
         let r = &mut self.report;
+        // Only `update` writes the diagnostics, and only on a step that
+        // reports `updated`: after a step without one they are still the
+        // defaults this clears them to (a predict-only step skips the
+        // 120-byte store, issue 17).
+        let diag_stale = r.updated;
         r.phase = self.phase;
         if self.phase != Phase::Monitoring {
             r.status = [ChannelState::NotMonitored; NZ];
@@ -598,7 +618,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         r.corrected_imu = corrected;
         r.detail.covariance_resets = self.ukf.covariance_resets();
         r.detail.innovation_inflation = self.inflation;
-        if !updated {
+        if !updated && diag_stale {
             r.detail.diag = [ChannelDiag::default(); NZ];
         }
     }
