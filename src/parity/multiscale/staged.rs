@@ -131,6 +131,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             p: *p,
             phi: *phi,
             level,
+            // The factor of the block before, reused while current.
+            cal: self.work.cal,
             ..Work::default()
         };
     }
@@ -153,9 +155,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         let next = match stage {
             // Not a stage of a block (the monitor runs those).
             BlockStage::Reconfigure(_) => return self.done(Outcome::Busy),
-            BlockStage::Factor => match self.calibration_factor() {
-                Some(l) => {
-                    self.work.cal = l;
+            BlockStage::Factor => match self.current_factor() {
+                Some(()) => {
                     if self.work.training {
                         BlockStage::TrainResidual
                     } else {
@@ -274,6 +275,18 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             }
         }
         Outcome::Busy
+    }
+
+    /// Puts the calibration's factor of the current `sxx` into the work:
+    /// kept from the block before when nothing was learned since (in
+    /// monitoring, every block that is not quiet enough to learn), else
+    /// factorised anew. `None` when it cannot be factorised.
+    fn current_factor(&mut self) -> Option<()> {
+        if !self.cal_current {
+            self.work.cal = self.calibration_factor()?;
+            self.cal_current = true;
+        }
+        Some(())
     }
 
     fn done(&mut self, o: Outcome<T>) -> Outcome<T> {
