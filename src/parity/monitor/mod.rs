@@ -10,17 +10,18 @@ use crate::stats::chi_square_upper_quantile;
 use super::config::{ParityConfig, ParityDetector};
 use super::health::{Reading, SensorHealth, SensorStatus};
 use super::multiscale::{Multiscale, MultiscaleDecision};
-use super::space::invert_rank3;
 use super::training::{Baseline, Trainer};
 use super::{ConfigError, Geometry, ParitySpace};
 pub use reconfig::reconfig_steps;
 
 mod build;
 mod flight;
+mod fusion;
 mod reconfig;
 mod white;
 
 use flight::BlockSums;
+use fusion::{fuse_subset, FusionCache};
 use reconfig::Reconfig;
 use white::Tests;
 
@@ -158,13 +159,6 @@ pub struct ParityMonitor<T: Real, const N: usize, const W: usize> {
     /// so the per-sample fusion reuses it (issue 14: the 3×3 Cholesky and
     /// inverse were ≈ 1 k instructions of every M4F step).
     fusion: Option<FusionCache<T, N>>,
-}
-
-/// The inverse normal matrix of one subset of usable sensors.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct FusionCache<T: Real, const N: usize> {
-    usable: [bool; N],
-    inv: Option<nalgebra::Matrix3<T>>,
 }
 
 impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
@@ -521,67 +515,4 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         self.ms = None;
         None
     }
-}
-
-impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
-    /// [`fuse_subset`] with the inverse normal matrix cached per usable
-    /// subset: bit-identical to it (the same sums in the same order, the
-    /// same inverse), with the 3×3 factorisation only when the subset
-    /// changes (a dropout, clipping, a failure; then once per change).
-    fn fuse_usable(&mut self, m: &SVector<T, N>, usable: &[bool; N]) -> Option<Vector3<T>> {
-        let geometry = self.space.geometry();
-        let inv = match self.fusion {
-            Some(c) if c.usable == *usable => c.inv,
-            _ => {
-                let inv = invert_rank3(&normal_matrix(geometry, usable)?);
-                self.fusion = Some(FusionCache {
-                    usable: *usable,
-                    inv,
-                });
-                inv
-            }
-        }?;
-        let mut hm = Vector3::<T>::zeros();
-        for (k, u) in usable.iter().enumerate() {
-            if *u {
-                hm += geometry.direction(k)? * m.get(k).copied().unwrap_or(T::zero());
-            }
-        }
-        Some(inv * hm)
-    }
-}
-
-/// `HᵀH` over the sensors marked usable (`None`: a sensor without a
-/// direction, which a valid geometry never has).
-fn normal_matrix<T: Real, const N: usize>(
-    geometry: &Geometry<T, N>,
-    usable: &[bool; N],
-) -> Option<nalgebra::Matrix3<T>> {
-    let mut g = nalgebra::Matrix3::<T>::zeros();
-    for (k, u) in usable.iter().enumerate() {
-        if *u {
-            let h = geometry.direction(k)?;
-            g += h * h.transpose();
-        }
-    }
-    Some(g)
-}
-
-/// Least squares over the sensors marked usable; `None` below rank 3.
-fn fuse_subset<T: Real, const N: usize>(
-    geometry: &Geometry<T, N>,
-    m: &SVector<T, N>,
-    usable: &[bool; N],
-) -> Option<Vector3<T>> {
-    let mut g = nalgebra::Matrix3::<T>::zeros();
-    let mut hm = Vector3::<T>::zeros();
-    for (k, u) in usable.iter().enumerate() {
-        if !u {
-            continue;
-        }
-        let h = geometry.direction(k)?;
-        g += h * h.transpose();
-        hm += h * m.get(k).copied().unwrap_or(T::zero());
-    }
-    invert_rank3(&g).map(|inv| inv * hm)
 }
