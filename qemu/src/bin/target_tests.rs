@@ -381,6 +381,25 @@ fn profile() {
         "wrap_pi (4)",
         imu_fdi::math::wrap_pi(core::hint::black_box(4.0f32))
     );
+    {
+        // The per-sample pieces of the real-flight parity monitor (three
+        // triads, all active; issue 14).
+        use imu_fdi::parity::{Geometry, HealthConfig, ParitySpace, Reading, SensorHealth};
+        let g = Geometry::<f32, 9>::triads(&[nalgebra::Matrix3::identity(); 3])
+            .unwrap_or_else(|_| loop {});
+        let space = ParitySpace::new(&g, &[true; 9]).unwrap_or_else(|_| loop {});
+        let m9 =
+            core::hint::black_box(nalgebra::SVector::<f32, 9>::from_fn(|i, _| 0.01 * i as f32));
+        let _ = cost!("parity V m (9x9)", space.parity(&m9));
+        let _ = cost!("parity fuse (3x9)", space.fuse(&m9));
+        let hc = HealthConfig::new(30.0f32);
+        let mut hs = [SensorHealth::<f32>::default(); 9];
+        cost!("parity health checks (9)", {
+            for (h, v) in hs.iter_mut().zip(m9.iter()) {
+                core::hint::black_box(h.check_unlatched(Reading::Sample(*v), &hc));
+            }
+        });
+    }
     let mut ukf = Ukf::<f32, 6, 13>::new(x, p, &SigmaParams::default(), STATE_ANGLES)
         .unwrap_or_else(|| loop {});
     let _ = cost!(

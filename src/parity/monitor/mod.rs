@@ -10,17 +10,18 @@ use crate::stats::chi_square_upper_quantile;
 use super::config::{ParityConfig, ParityDetector};
 use super::health::{Reading, SensorHealth, SensorStatus};
 use super::multiscale::{Multiscale, MultiscaleDecision};
-use super::space::invert_rank3;
 use super::training::{Baseline, Trainer};
 use super::{ConfigError, Geometry, ParitySpace};
 pub use reconfig::reconfig_steps;
 
 mod build;
 mod flight;
+mod fusion;
 mod reconfig;
 mod white;
 
 use flight::BlockSums;
+use fusion::{fuse_subset, FusionCache};
 use reconfig::Reconfig;
 use white::Tests;
 
@@ -153,6 +154,11 @@ pub struct ParityMonitor<T: Real, const N: usize, const W: usize> {
     /// A block completed while the tests were still being built at the end
     /// of training, decided once they are.
     held: Option<SVector<T, N>>,
+    /// The fusion's `(HᵀH)⁻¹` over the last usable subset (`None` inside:
+    /// that subset is below rank 3). It only changes when the subset does,
+    /// so the per-sample fusion reuses it (issue 14: the 3×3 Cholesky and
+    /// inverse were ≈ 1 k instructions of every M4F step).
+    fusion: Option<FusionCache<T, N>>,
 }
 
 impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
@@ -236,6 +242,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             ms_trained: false,
             reconfig: Reconfig::Idle,
             held: None,
+            fusion: None,
         }
         .with_multiscale()
     }
@@ -275,7 +282,19 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
 
     /// One period: checks each reading, fuses the usable ones, and — when
     /// every active sensor delivered a usable sample — trains or tests.
+    ///
+    /// Returns a copy of the report; [`step_ref`](Self::step_ref) is the
+    /// same step returning a reference to it.
+    #[inline]
     pub fn step(&mut self, readings: &[Reading<T>; N]) -> ParityReport<T, N> {
+        *self.step_ref(readings)
+    }
+
+    /// [`step`](Self::step) returning the report by reference (it lives in
+    /// the monitor until the next step): the same step without the copy of
+    /// the report into the caller's (issue 14, as `UkfMonitor::step_ref`).
+    #[inline(never)] // one copy in the image, not one per caller
+    pub fn step_ref(&mut self, readings: &[Reading<T>; N]) -> &ParityReport<T, N> {
         let mut m = SVector::<T, N>::zeros();
         let mut usable = [false; N];
         let mut status = [SensorStatus::Healthy; N];
@@ -346,7 +365,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                 self.exclude(k);
             }
         }
-        report.fused = fuse_subset(self.space.geometry(), &m, &usable);
+        report.fused = self.fuse_usable(&m, &usable);
         // One stage of a reconfiguration in progress, or else of the
         // multi-scale block in work (issue 17: a block's work spread over
         // the next block's samples, which may isolate and reconfigure): both
@@ -409,7 +428,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             report.pca_threshold = t.pca_threshold;
         }
         self.last = report;
-        report
+        &self.last
     }
 
     /// Threshold factors `[GLT, PCA, CUSUM]` set by calibration (1 = the
@@ -496,23 +515,4 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         self.ms = None;
         None
     }
-}
-
-/// Least squares over the sensors marked usable; `None` below rank 3.
-fn fuse_subset<T: Real, const N: usize>(
-    geometry: &Geometry<T, N>,
-    m: &SVector<T, N>,
-    usable: &[bool; N],
-) -> Option<Vector3<T>> {
-    let mut g = nalgebra::Matrix3::<T>::zeros();
-    let mut hm = Vector3::<T>::zeros();
-    for (k, u) in usable.iter().enumerate() {
-        if !u {
-            continue;
-        }
-        let h = geometry.direction(k)?;
-        g += h * h.transpose();
-        hm += h * m.get(k).copied().unwrap_or(T::zero());
-    }
-    invert_rank3(&g).map(|inv| inv * hm)
 }

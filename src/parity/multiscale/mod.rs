@@ -155,6 +155,11 @@ pub struct Multiscale<T: Real, const N: usize, const W: usize> {
     trained_blocks: u32,
     /// The block in work, one stage per monitor step.
     work: staged::Work<T, N>,
+    /// The work's calibration factor is that of the current `sxx + ridge`
+    /// (nothing learned since it was computed): the next block reuses it
+    /// instead of refactorising the same matrix (issue 14; bit-identical,
+    /// the factorisation is deterministic).
+    cal_current: bool,
 }
 
 impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
@@ -206,6 +211,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                 .unwrap_or(T::zero()),
             trained_blocks: 0,
             work: staged::Work::default(),
+            cal_current: false,
         }
     }
 
@@ -246,6 +252,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     pub fn learn_calibration(&mut self, p: &SVector<T, N>, phi: &Phi<T>, forget: bool) {
         // `sxx` is symmetric: only its lower triangle is kept (the factor
         // reads no more); `spx` rows beyond `dim` are zero (so are `p`'s).
+        // `sxx` changes: the factor kept in the work is stale.
+        self.cal_current = false;
         let lambda = T::one() - T::one() / self.cfg.calibration_blocks;
         let dim = self.dim.min(N);
         let phis = phi.as_slice();

@@ -131,6 +131,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             p: *p,
             phi: *phi,
             level,
+            // The factor of the block before, reused while current.
+            cal: self.work.cal,
             ..Work::default()
         };
     }
@@ -153,9 +155,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         let next = match stage {
             // Not a stage of a block (the monitor runs those).
             BlockStage::Reconfigure(_) => return self.done(Outcome::Busy),
-            BlockStage::Factor => match self.calibration_factor() {
-                Some(l) => {
-                    self.work.cal = l;
+            BlockStage::Factor => match self.current_factor() {
+                Some(()) => {
                     if self.work.training {
                         BlockStage::TrainResidual
                     } else {
@@ -276,6 +277,18 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         Outcome::Busy
     }
 
+    /// Puts the calibration's factor of the current `sxx` into the work:
+    /// kept from the block before when nothing was learned since (in
+    /// monitoring, every block that is not quiet enough to learn), else
+    /// factorised anew. `None` when it cannot be factorised.
+    fn current_factor(&mut self) -> Option<()> {
+        if !self.cal_current {
+            self.work.cal = self.calibration_factor()?;
+            self.cal_current = true;
+        }
+        Some(())
+    }
+
     fn done(&mut self, o: Outcome<T>) -> Outcome<T> {
         self.work.stage = None;
         o
@@ -394,6 +407,61 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                     self.dim,
                 );
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::MultiscaleConfig;
+    use super::*;
+
+    fn block(i: usize) -> (SVector<f32, 9>, Phi<f32>) {
+        let p = SVector::<f32, 9>::from_fn(|k, _| {
+            if k < 6 {
+                ((i * 9 + k) as f32 * 0.37).sin() * 0.02
+            } else {
+                0.0
+            }
+        });
+        let phi = Phi::<f32>::from_fn(|k, _| {
+            if k == 0 {
+                1.0
+            } else {
+                ((i * 16 + k) as f32 * 0.91).cos()
+            }
+        });
+        (p, phi)
+    }
+
+    /// The factor a block reuses is the one the current `sxx` gives, bit for
+    /// bit, and a learned block makes the next one factorise anew.
+    #[test]
+    fn the_reused_calibration_factor_is_that_of_the_current_matrix() {
+        let cfg = MultiscaleConfig::<f32>::new(0.0175, f32::INFINITY);
+        let mut ms = Multiscale::<f32, 9, 40>::new(cfg, 6, [30.0; SCALES]);
+        for i in 0..40 {
+            let (p, phi) = block(i);
+            ms.learn_calibration(&p, &phi, i > 20);
+        }
+        let bits = |m: &SMatrix<f32, REGRESSORS, REGRESSORS>| m.map(f32::to_bits);
+        let fresh = |ms: &Multiscale<f32, 9, 40>| bits(&ms.calibration_factor().unwrap());
+        let v = SMatrix::<f32, 9, 9>::identity();
+        let active = [true; 9];
+        for (i, learn) in [(40, false), (41, false), (42, true), (43, false)] {
+            let (p, phi) = block(i);
+            if learn {
+                ms.learn_calibration(&p, &phi, true);
+                assert!(!ms.cal_current);
+            }
+            let reused = ms.cal_current;
+            ms.begin(&p, &phi, 1.0, None);
+            assert_eq!(ms.pending(), Some(BlockStage::Factor));
+            ms.advance(&v, &active);
+            assert!(ms.cal_current);
+            assert_eq!(bits(&ms.work.cal), fresh(&ms), "block {i}");
+            // Reused exactly when nothing was learned since the last block.
+            assert_eq!(reused, i != 40 && !learn, "block {i}");
         }
     }
 }
