@@ -73,8 +73,6 @@ pub(super) struct DelayEstimator<T> {
     blocks: T,
     /// Each aiding channel's previous value and IMU periods since it.
     prev: [Option<(T, usize)>; NZ],
-    /// The lag the filter fused at while the moments were gathered.
-    gathered_at: usize,
 }
 
 impl<T: Real> DelayEstimator<T> {
@@ -89,23 +87,6 @@ impl<T: Real> DelayEstimator<T> {
             block_valid: LAGS,
             blocks: T::zero(),
             prev: [None; NZ],
-            gathered_at: 0,
-        }
-    }
-
-    /// The filter now fuses at `lag`: when that is `moves` or more periods
-    /// from the lag the moments were gathered at, they are dropped. Blocks
-    /// gathered while fusing at a wrong lag lean towards it (measured on
-    /// the AUV with 0.2 s late aiding, fusing first at 0: 0.13–0.16 s after
-    /// 20 s, rising over 5 min to 0.20 s as the old blocks were forgotten).
-    pub(super) fn fusing_at(&mut self, lag: usize, moves: usize) {
-        if lag.abs_diff(self.gathered_at) >= moves {
-            self.cost = [T::zero(); LAGS];
-            self.mean = [[T::zero(); 3]; LAGS];
-            self.square = [[T::zero(); 3]; LAGS];
-            self.valid = LAGS;
-            self.blocks = T::zero();
-            self.gathered_at = lag;
         }
     }
 
@@ -292,7 +273,6 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         );
         if let Some(lag) = self.delay_estimator.best() {
             self.delay_steps = lag;
-            self.delay_estimator.fusing_at(lag, DELAY_RELEARN_STEPS);
             if lag.abs_diff(self.learned_lag) >= DELAY_RELEARN_STEPS {
                 self.relearn_at(lag);
             }
