@@ -224,13 +224,50 @@ fn late_aiding_estimated_twenty_seeds_and_ten_hours() {
     let on_time = Scenario::aircraft_fault_free(0.0);
     let t = episodes_with(&on_time, 100..120, Setup::EstimateDelay);
     assert_targets("aircraft, aiding on time, estimated, seeds 100-119", &t);
-    // The AUV with late aiding: every episode found, but not yet clean
-    // after the faults clear (open, docs/results.md).
+    // The AUV with late aiding (seeds 700-719 not looked at while
+    // designing; 500-519 looked at while diagnosing seeds 510 and 515).
     let mut auv = Scenario::auv_fault_free(0.0);
     auv.aiding.delay_s = 0.2;
-    let t = episodes_with(&auv, 100..120, Setup::EstimateDelay);
-    println!("AUV, 0.2 s late, estimated, seeds 100-119: {}", t.line());
-    assert_eq!(t.detected, t.episodes);
+    for (name, seeds) in [
+        ("seeds 100-119", 100..120),
+        ("seeds 500-519", 500..520),
+        ("held-out seeds 700-719", 700..720),
+    ] {
+        let t = episodes_with(&auv, seeds, Setup::EstimateDelay);
+        println!("AUV, 0.2 s late, estimated, {name}: {}", t.line());
+        assert_eq!(t.detected, t.episodes, "{name}");
+        assert!(
+            t.post_clear_events as f64 <= t.post_clear_s / 3600.0,
+            "{name}: post-clear false alarms"
+        );
+    }
+    let mut hour = auv;
+    hour.duration_s = 3600.0;
+    let m = fault_free_with(&hour, 200..205, Setup::EstimateDelay);
+    println!(
+        "AUV, 0.2 s late, estimated, 5 fault-free hours (seeds 200-204): {} false-alarm events in {:.2} h",
+        m.false_alarm_events,
+        m.free_time_s / 3600.0
+    );
+    assert!(m.false_alarm_events as f64 <= m.free_time_s / 3600.0);
+}
+
+/// GIVEN an AUV whose aiding is 0.2 s late, WHEN the monitor estimates the
+/// latency, THEN every episode is flagged and none after the faults clear.
+/// Seeds 103 and 119 are the two that failed before the estimator put the
+/// learnt gyro bias back into the propagated attitude changes: 31 and 13
+/// post-clear events (the estimate was 0.16 s and 0.07 s when monitoring
+/// started and crept to 0.20 s over 5 min, pulled towards the lag in use).
+#[test]
+fn auv_late_aiding_estimated_two_seeds() {
+    let mut auv = Scenario::auv_fault_free(0.0);
+    auv.aiding.delay_s = 0.2;
+    for seed in [103, 119] {
+        let t = episodes_with(&auv, seed..seed + 1, Setup::EstimateDelay);
+        println!("AUV, 0.2 s late, estimated, seed {seed}: {}", t.line());
+        assert_eq!(t.detected, t.episodes, "seed {seed}");
+        assert_eq!(t.post_clear_events, 0, "seed {seed}");
+    }
 }
 
 /// GIVEN a 3° heading offset learnt online, WHEN the estimator applies an
