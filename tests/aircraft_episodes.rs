@@ -39,6 +39,11 @@ fn config(scn: &Scenario, setup: Setup) -> UkfMonitorConfig<f32> {
     let mut c = monitor_config::<f32>(scn, &RunOptions::default());
     c.estimate_aiding_delay = matches!(setup, Setup::EstimateDelay);
     c.estimate_heading_offset = matches!(setup, Setup::EstimateHeading);
+    if c.estimate_heading_offset {
+        // As `estimate_heading_offset`'s documentation advises: the
+        // unresolved offset leaves the velocity innovations non-white.
+        c.persistence = 2;
+    }
     c
 }
 
@@ -71,10 +76,9 @@ fn fault_free(base: &Scenario, seeds: std::ops::Range<u64>) -> RunMetrics {
     fault_free_with(base, seeds, Setup::Specs)
 }
 
-/// The targets, except the step delay: its median is asserted
-/// ≤ 1.1 s, not the 1 s (measured 1.05 s over 240 episodes: the
-/// 0.3 m/s² steps take 1.2 s to fill a 1 s window at 10 Hz GNSS; see
-/// docs/results.md).
+/// The targets: ≥ 99 % detected, step delay median ≤ 1 s (1.05 s
+/// with the former two-decision persistence on the aircraft, 0.95 s with
+/// one; docs/results.md), no post-clear false alarm.
 fn assert_targets(name: &str, t: &EpisodeTotals) {
     println!("{name}: {}", t.line());
     assert!(
@@ -83,7 +87,7 @@ fn assert_targets(name: &str, t: &EpisodeTotals) {
         t.detected,
         t.episodes
     );
-    assert!(t.step_delay_median_s <= 1.1, "{name}: step delay median");
+    assert!(t.step_delay_median_s <= 1.0, "{name}: step delay median");
     assert_eq!(t.post_clear_events, 0, "{name}: post-clear false alarms");
 }
 
@@ -184,7 +188,8 @@ fn the_online_delay_estimate_finds_the_latency() {
 }
 
 /// The targets with late aiding: the step delay median includes the 0.2 s
-/// the aiding arrives late, so it is asserted ≤ 1.4 s (measured 1.30 s).
+/// the aiding arrives late, so it is asserted ≤ 1.2 s (measured 1.15–1.16 s
+/// on 40 seeds).
 fn assert_targets_late(name: &str, t: &EpisodeTotals) {
     println!("{name}: {}", t.line());
     assert!(
@@ -193,7 +198,7 @@ fn assert_targets_late(name: &str, t: &EpisodeTotals) {
         t.detected,
         t.episodes
     );
-    assert!(t.step_delay_median_s <= 1.4, "{name}: step delay median");
+    assert!(t.step_delay_median_s <= 1.2, "{name}: step delay median");
     assert_eq!(t.post_clear_events, 0, "{name}: post-clear false alarms");
 }
 
@@ -405,8 +410,9 @@ fn aircraft_heading_offset() {
             t.line()
         );
         assert!(t.detected as f64 >= 0.99 * t.episodes as f64, "{name}");
-        // Measured 20 in 1.03 h on 500-519 (71 before the learning took
-        // only uncontaminated epochs): a bound so that a change shows.
+        // Measured 20 in 1.03 h on 500-519 (46 with one decision, 71
+        // before the learning took only uncontaminated epochs): a bound so
+        // that a change shows.
         assert!(
             t.post_clear_events as f64 <= 30.0 * t.post_clear_s / 3600.0,
             "{name}"
