@@ -316,8 +316,9 @@ impl<T: Real> UkfMonitorConfig<T> {
             T::lit(1.0 * deg),
         );
         // One decision, not two: the false-alarm rate is set by `alpha`
-        // (a flag needs some channel's test to fire, so at most 6·α per
-        // aiding epoch: 0.22 events per hour at 10 Hz and α = 10⁻⁶), and
+        // (a flag needs some channel's two-sided test to fire, so at most
+        // 6·2α per aiding epoch: 0.43 events per hour at 10 Hz and
+        // α = 10⁻⁶, on innovations as white as the learnt inflation says), and
         // the windows of consecutive epochs share W − 1 samples, so a second
         // decision adds little independent evidence but one aiding interval
         // of delay (issue 15: aircraft step delay median 1.05 s → 0.95 s,
