@@ -39,6 +39,11 @@ fn config(scn: &Scenario, setup: Setup) -> UkfMonitorConfig<f32> {
     let mut c = monitor_config::<f32>(scn, &RunOptions::default());
     c.estimate_aiding_delay = matches!(setup, Setup::EstimateDelay);
     c.estimate_heading_offset = matches!(setup, Setup::EstimateHeading);
+    if c.estimate_heading_offset {
+        // As `estimate_heading_offset`'s documentation advises: the
+        // unresolved offset leaves the velocity innovations non-white.
+        c.persistence = 2;
+    }
     c
 }
 
@@ -71,10 +76,9 @@ fn fault_free(base: &Scenario, seeds: std::ops::Range<u64>) -> RunMetrics {
     fault_free_with(base, seeds, Setup::Specs)
 }
 
-/// The targets, except the step delay: its median is asserted
-/// ≤ 1.1 s, not the 1 s (measured 1.05 s over 240 episodes: the
-/// 0.3 m/s² steps take 1.2 s to fill a 1 s window at 10 Hz GNSS; see
-/// docs/results.md).
+/// The targets: ≥ 99 % detected, step delay median ≤ 1 s (1.05 s
+/// with the former two-decision persistence on the aircraft, 0.95 s with
+/// one; docs/results.md), no post-clear false alarm.
 fn assert_targets(name: &str, t: &EpisodeTotals) {
     println!("{name}: {}", t.line());
     assert!(
@@ -83,7 +87,7 @@ fn assert_targets(name: &str, t: &EpisodeTotals) {
         t.detected,
         t.episodes
     );
-    assert!(t.step_delay_median_s <= 1.1, "{name}: step delay median");
+    assert!(t.step_delay_median_s <= 1.0, "{name}: step delay median");
     assert_eq!(t.post_clear_events, 0, "{name}: post-clear false alarms");
 }
 
@@ -184,7 +188,8 @@ fn the_online_delay_estimate_finds_the_latency() {
 }
 
 /// The targets with late aiding: the step delay median includes the 0.2 s
-/// the aiding arrives late, so it is asserted ≤ 1.4 s (measured 1.30 s).
+/// the aiding arrives late, so it is asserted ≤ 1.2 s (measured 1.15–1.16 s
+/// on 40 seeds).
 fn assert_targets_late(name: &str, t: &EpisodeTotals) {
     println!("{name}: {}", t.line());
     assert!(
@@ -193,7 +198,7 @@ fn assert_targets_late(name: &str, t: &EpisodeTotals) {
         t.detected,
         t.episodes
     );
-    assert!(t.step_delay_median_s <= 1.4, "{name}: step delay median");
+    assert!(t.step_delay_median_s <= 1.2, "{name}: step delay median");
     assert_eq!(t.post_clear_events, 0, "{name}: post-clear false alarms");
 }
 
@@ -224,13 +229,50 @@ fn late_aiding_estimated_twenty_seeds_and_ten_hours() {
     let on_time = Scenario::aircraft_fault_free(0.0);
     let t = episodes_with(&on_time, 100..120, Setup::EstimateDelay);
     assert_targets("aircraft, aiding on time, estimated, seeds 100-119", &t);
-    // The AUV with late aiding: every episode found, but not yet clean
-    // after the faults clear (open, docs/results.md).
+    // The AUV with late aiding (seeds 700-719 not looked at while
+    // designing; 500-519 looked at while diagnosing seeds 510 and 515).
     let mut auv = Scenario::auv_fault_free(0.0);
     auv.aiding.delay_s = 0.2;
-    let t = episodes_with(&auv, 100..120, Setup::EstimateDelay);
-    println!("AUV, 0.2 s late, estimated, seeds 100-119: {}", t.line());
-    assert_eq!(t.detected, t.episodes);
+    for (name, seeds) in [
+        ("seeds 100-119", 100..120),
+        ("seeds 500-519", 500..520),
+        ("held-out seeds 700-719", 700..720),
+    ] {
+        let t = episodes_with(&auv, seeds, Setup::EstimateDelay);
+        println!("AUV, 0.2 s late, estimated, {name}: {}", t.line());
+        assert_eq!(t.detected, t.episodes, "{name}");
+        assert!(
+            t.post_clear_events as f64 <= t.post_clear_s / 3600.0,
+            "{name}: post-clear false alarms"
+        );
+    }
+    let mut hour = auv;
+    hour.duration_s = 3600.0;
+    let m = fault_free_with(&hour, 200..205, Setup::EstimateDelay);
+    println!(
+        "AUV, 0.2 s late, estimated, 5 fault-free hours (seeds 200-204): {} false-alarm events in {:.2} h",
+        m.false_alarm_events,
+        m.free_time_s / 3600.0
+    );
+    assert!(m.false_alarm_events as f64 <= m.free_time_s / 3600.0);
+}
+
+/// GIVEN an AUV whose aiding is 0.2 s late, WHEN the monitor estimates the
+/// latency, THEN every episode is flagged and none after the faults clear.
+/// Seeds 103 and 119 are the two that failed before the estimator put the
+/// learnt gyro bias back into the propagated attitude changes: 31 and 13
+/// post-clear events (the estimate was 0.16 s and 0.07 s when monitoring
+/// started and crept to 0.20 s over 5 min, pulled towards the lag in use).
+#[test]
+fn auv_late_aiding_estimated_two_seeds() {
+    let mut auv = Scenario::auv_fault_free(0.0);
+    auv.aiding.delay_s = 0.2;
+    for seed in [103, 119] {
+        let t = episodes_with(&auv, seed..seed + 1, Setup::EstimateDelay);
+        println!("AUV, 0.2 s late, estimated, seed {seed}: {}", t.line());
+        assert_eq!(t.detected, t.episodes, "seed {seed}");
+        assert_eq!(t.post_clear_events, 0, "seed {seed}");
+    }
 }
 
 /// GIVEN a 3° heading offset learnt online, WHEN the estimator applies an
@@ -368,8 +410,9 @@ fn aircraft_heading_offset() {
             t.line()
         );
         assert!(t.detected as f64 >= 0.99 * t.episodes as f64, "{name}");
-        // Measured 20 in 1.03 h on 500-519 (71 before the learning took
-        // only uncontaminated epochs): a bound so that a change shows.
+        // Measured 20 in 1.03 h on 500-519 (46 with one decision, 71
+        // before the learning took only uncontaminated epochs): a bound so
+        // that a change shows.
         assert!(
             t.post_clear_events as f64 <= 30.0 * t.post_clear_s / 3600.0,
             "{name}"
