@@ -205,6 +205,11 @@ pub fn csv_extracts_to_replay_csv(
     check_times(imu, &time_name, &times)?;
     data.check(imu)?;
     let n = t.len();
+    // Named here, on the input: the writer's own check can only name its
+    // output file.
+    if n < 10 {
+        bail!("{}: fewer than 10 IMU samples", imu.display());
+    }
     let slot = |x: f64| t.partition_point(|v| *v < x);
     let mut gnss_rows: Vec<Option<[f64; 3]>> = vec![None; n];
     if let Some(p) = gnss {
@@ -292,6 +297,19 @@ mod tests {
         r.records()
             .map(|x| x.expect("row").iter().map(str::to_string).collect())
             .collect()
+    }
+
+    #[test]
+    fn too_few_rows_is_an_error_naming_the_input() {
+        let imu = write(
+            "few_rows_imu.csv",
+            "t,imu0_ax,imu0_ay,imu0_az,imu0_gx,imu0_gy,imu0_gz\n0.0,0,0,-9.8,0,0,0\n0.1,0,0,-9.8,0,0,0\n",
+        );
+        let out = imu.with_extension("out.csv");
+        let e = csv_extracts_to_replay_csv(&imu, None, None, &out).unwrap_err();
+        let msg = format!("{e:#}");
+        assert!(msg.starts_with(&imu.display().to_string()), "{msg}");
+        assert!(msg.contains("fewer than 10 IMU samples"), "{msg}");
     }
 
     #[test]
