@@ -27,7 +27,7 @@ fn parse_opt(rec: &csv::StringRecord, idx: Option<usize>) -> Option<f64> {
     s.parse::<f64>().ok()
 }
 
-pub use super::replay_options::{AidingDelay, Profile, ReplayOptions};
+pub use super::replay_options::{flight_config, AidingDelay, Profile, ReplayOptions};
 
 /// One input row.
 struct Row {
@@ -49,35 +49,6 @@ fn channel_name(k: usize, c: &str) -> String {
     } else {
         format!("imu{k}_{c}")
     }
-}
-
-/// The monitor tuning of the `Flight` profile: `base` (its detector and
-/// test settings are kept) with the aiding noise of `opts`, period `dt` and
-/// the process noise measured on IMU samples `imu` (rows within the learning
-/// span).
-pub fn flight_config(
-    mut c: UkfMonitorConfig<f64>,
-    dt: f64,
-    imu: &[[f64; 6]],
-    opts: &ReplayOptions,
-) -> UkfMonitorConfig<f64> {
-    let [r, p, y] = opts.att_sigma;
-    c.meas_sigma = MeasVec::new(opts.vel_sigma, opts.vel_sigma, opts.vel_sigma, r, p, y);
-    // Vibration dominates a flying vehicle's IMU noise; measure it, with a
-    // floor at the datasheet-class default (a bench log reads ~0).
-    let sigma = crate::eval::inject::difference_sigma(imu);
-    for (i, s) in sigma.iter().enumerate() {
-        if let Some(q) = c.process_noise.psd.get_mut(i) {
-            *q = q.max(s * s * dt);
-        }
-    }
-    c.imu_period = dt;
-    c.learn_s = opts.learn_s.unwrap_or(20.0);
-    // Real aiding errors are time-correlated: learn the t statistic's
-    // inflation on the flight's own healthy start (bounded: a fault up to
-    // √25 = 5× the white-noise detectable size is still found).
-    c.max_innovation_inflation = opts.max_inflation.unwrap_or(25.0);
-    c
 }
 
 /// Replays `input` (SPEC §10 CSV; every `imu{k}_…` triad gets its own

@@ -2,8 +2,7 @@ use nalgebra::Vector3;
 
 use super::align::align_state;
 use super::input::{
-    aiding_in_range, check_period, in_range, lever_arm_rates, next_phase, saturated, usable_aiding,
-    Period,
+    aiding_in_range, check_period, in_range, lever_arm_rates, saturated, usable_aiding, Period,
 };
 use super::realign::NEVER_FUSED_S;
 use super::{ChannelState, ConfigError, Health, Phase, UkfMonitorConfig, UkfReport};
@@ -23,6 +22,7 @@ mod delay;
 mod detection;
 mod heading;
 mod history;
+mod phase;
 mod realign;
 
 use delay::DelayEstimator;
@@ -536,50 +536,6 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         self.last_h = h;
         Ok((rejected, out.covariance_reset.is_some()))
-    }
-
-    fn advance_phase(&mut self) {
-        let next = next_phase(
-            self.phase,
-            self.phase_time,
-            self.cfg.converge_s,
-            self.cfg.learn_s,
-        );
-        match next {
-            Some(Phase::Learning) => {
-                self.phase = Phase::Learning;
-                self.learn_clock = self.phase_time;
-                self.learned_lag = self.delay_steps;
-            }
-            Some(Phase::Monitoring) => {
-                self.phase = Phase::Monitoring;
-                self.freeze_inflation();
-                for w in self.windows.iter_mut() {
-                    w.clear();
-                }
-                self.persistence.reset();
-            }
-            _ => {}
-        }
-    }
-
-    /// During learning, starts it again (an aiding-timing or heading
-    /// estimate moved: what was learnt so far fits the old one); once
-    /// monitoring, does nothing, since a restart would absorb whatever fault
-    /// is present into the nominal bias.
-    fn restart_learning(&mut self) {
-        if self.phase != Phase::Learning {
-            return;
-        }
-        self.phase_time = self.cfg.converge_s;
-        self.learn_clock = self.phase_time;
-        self.inflation_sum = [T::zero(); NZ];
-        self.inflation_n = [T::zero(); NZ];
-        self.inflation = [T::one(); NZ];
-        for w in self.windows.iter_mut() {
-            w.clear();
-        }
-        self.persistence.reset();
     }
 
     /// Writes this step's report into `self.report` in place (no copy of

@@ -1,0 +1,56 @@
+//! The UKF monitor's phases: converging, learning, monitoring, and the
+//! restart of learning when an aiding estimate moves.
+
+use super::{Phase, UkfMonitor};
+use crate::math::Real;
+use crate::model::NZ;
+use crate::monitor::input::next_phase;
+
+impl<T: Real, const W: usize> UkfMonitor<T, W> {
+    /// Moves converging → learning → monitoring when the phase's time is up
+    /// (learning starts the lag it learns at; monitoring freezes the
+    /// inflation and starts the windows afresh).
+    pub(super) fn advance_phase(&mut self) {
+        let next = next_phase(
+            self.phase,
+            self.phase_time,
+            self.cfg.converge_s,
+            self.cfg.learn_s,
+        );
+        match next {
+            Some(Phase::Learning) => {
+                self.phase = Phase::Learning;
+                self.learn_clock = self.phase_time;
+                self.learned_lag = self.delay_steps;
+            }
+            Some(Phase::Monitoring) => {
+                self.phase = Phase::Monitoring;
+                self.freeze_inflation();
+                for w in self.windows.iter_mut() {
+                    w.clear();
+                }
+                self.persistence.reset();
+            }
+            _ => {}
+        }
+    }
+
+    /// During learning, starts it again (an aiding-timing or heading
+    /// estimate moved: what was learnt so far fits the old one); once
+    /// monitoring, does nothing, since a restart would absorb whatever fault
+    /// is present into the nominal bias.
+    pub(super) fn restart_learning(&mut self) {
+        if self.phase != Phase::Learning {
+            return;
+        }
+        self.phase_time = self.cfg.converge_s;
+        self.learn_clock = self.phase_time;
+        self.inflation_sum = [T::zero(); NZ];
+        self.inflation_n = [T::zero(); NZ];
+        self.inflation = [T::one(); NZ];
+        for w in self.windows.iter_mut() {
+            w.clear();
+        }
+        self.persistence.reset();
+    }
+}
