@@ -89,16 +89,7 @@ fn projections<T: Real, const N: usize>(
     }
     let block_cov = &t.baseline.block_cov;
     // Pad the unused block with identity so the factorisation is full rank.
-    let padded = SMatrix::<T, N, N>::from_fn(|i, j| {
-        if i < dim && j < dim {
-            at(block_cov, i, j)
-        } else if i == j {
-            T::one()
-        } else {
-            T::zero()
-        }
-    });
-    let l = cholesky(&padded).ok()?;
+    let l = cholesky(&padded(block_cov, dim, T::one())).ok()?;
     let mut cov_inv = cholesky_solve_right(&l, &SMatrix::<T, N, N>::identity());
     let mut a = cholesky_solve_right(&l, &space.v().transpose()).transpose();
     for i in dim..N {
@@ -129,13 +120,8 @@ fn pca<T: Real, const N: usize>(
 ) -> Option<()> {
     let dim = space.dim();
     let block_cov = &t.baseline.block_cov;
-    let (values, vectors) = symmetric_eigen(&SMatrix::<T, N, N>::from_fn(|i, j| {
-        if i < dim && j < dim {
-            at(block_cov, i, j)
-        } else {
-            T::zero()
-        }
-    }))?;
+    // Pad with zeros: the unused directions get eigenvalue 0 and sort last.
+    let (values, vectors) = symmetric_eigen(&padded(block_cov, dim, T::zero()))?;
     let pca_dims = dim.min(2);
     for c in 0..pca_dims {
         t.pca_basis.set_column(c, &vectors.column(c));
@@ -145,6 +131,24 @@ fn pca<T: Real, const N: usize>(
     }
     t.pca_threshold = *chi2.get(pca_dims)? * cfg.threshold_margin * scales[1];
     Some(())
+}
+
+/// The parity block covariance's leading `dim × dim` block, with `diagonal`
+/// on the rest of the diagonal and zeros elsewhere.
+fn padded<T: Real, const N: usize>(
+    block_cov: &SMatrix<T, N, N>,
+    dim: usize,
+    diagonal: T,
+) -> SMatrix<T, N, N> {
+    SMatrix::<T, N, N>::from_fn(|i, j| {
+        if i < dim && j < dim {
+            at(block_cov, i, j)
+        } else if i == j {
+            diagonal
+        } else {
+            T::zero()
+        }
+    })
 }
 
 /// Newton iterations of the CUSUM threshold's root search in the first of
