@@ -254,6 +254,9 @@ pub(crate) fn run(args: Args) -> Result<()> {
             e
         }
     })?;
+    if let Some(why) = &s.ended_early {
+        eprintln!("warning: {why}");
+    }
     note!(
             "replayed {} rows ({} skipped, {} IMU rows rejected) of {} IMU(s) at {:.1} Hz, t = {:.2}..{:.2} s; aiding {}, profile {}, monitoring from {:?} s ({} samples)",
             s.rows,

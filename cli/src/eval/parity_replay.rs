@@ -68,9 +68,9 @@ pub fn read_imu_log(path: &Path) -> Result<ImuLog> {
     let mut data = ColumnData::new(names.iter().flatten().cloned().collect());
     let mut times = Vec::new();
     let mut first_skipped = None;
-    for (line, rec) in rdr.records().enumerate() {
-        let line = line + 2;
-        let rec = rec.with_context(|| format!("{}: line {line}", path.display()))?;
+    let mut rows = crate::io::log_import::CsvRows::new(&mut rdr, path, headers.len());
+    for row in rows.by_ref() {
+        let (line, rec) = row?;
         let t = parse_cell(path, line, "t", rec.get(t_col))?;
         if t.is_finite() {
             times.push((line, t));
@@ -94,6 +94,7 @@ pub fn read_imu_log(path: &Path) -> Result<ImuLog> {
         log.t.push(t);
         log.imus.push(row);
     }
+    log.warnings.extend(rows.cut_tail.take());
     check_times(path, "t", &times)?;
     if log.t.len() < 10 {
         bail!(

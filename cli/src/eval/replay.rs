@@ -130,9 +130,9 @@ pub fn replay_observed(
     let mut times = Vec::new();
     let mut rows: Vec<Row> = Vec::new();
     let mut last_t: Option<f64> = None;
-    for (line, rec) in rdr.records().enumerate() {
-        let line = line + 2;
-        let rec = rec.with_context(|| format!("{}: bad CSV at line {line}", input.display()))?;
+    let mut csv_rows = crate::io::log_import::CsvRows::new(&mut rdr, input, headers.len());
+    for row in csv_rows.by_ref() {
+        let (line, rec) = row?;
         sum.rows += 1;
         let t = parse_cell(input, line, "t", rec.get(t_idx))?;
         for (k, idx) in imu_idx.iter().enumerate() {
@@ -198,6 +198,7 @@ pub fn replay_observed(
             truth,
         });
     }
+    sum.ended_early = csv_rows.cut_tail.take();
     check_times(input, "t", &times)?;
     if rows.len() < 10 {
         bail!(

@@ -59,6 +59,9 @@ pub struct ReplaySummary {
     pub skipped_rows: usize,
     /// Rows whose IMU sample the monitor rejected (NaN, out of range).
     pub rejected_imu_rows: usize,
+    /// Set when the CSV's last row was cut short (a log that ends
+    /// mid-write) and dropped: one line naming the file and the line.
+    pub ended_early: Option<String>,
     /// Aiding model detected from the columns.
     pub aiding: String,
     /// Tuning profile used (`Sim` or `Flight`).

@@ -8,7 +8,7 @@ use anyhow::{bail, Context, Result};
 use imu_fdi::math::wrap_pi_f64;
 
 use super::log_import::{
-    open_csv, quaternion_to_euler, write_replay_csv, ImportSummary, ReplayRows,
+    open_csv, quaternion_to_euler, write_replay_csv, CsvRows, ImportSummary, ReplayRows,
 };
 
 /// An IMU column layout of a CSV extract not in SPEC §10 form
@@ -115,12 +115,20 @@ fn imu_layout(headers: &csv::StringRecord) -> Option<ImuLayout> {
     })
 }
 
-fn read_table(path: &Path) -> Result<(csv::StringRecord, Vec<csv::StringRecord>)> {
+/// The header and the rows of a CSV extract. A last row cut short (the
+/// extract ends mid-write) is dropped, as [`CsvRows`] does, and its warning
+/// pushed on `cut`.
+fn read_table(
+    path: &Path,
+    cut: &mut Vec<String>,
+) -> Result<(csv::StringRecord, Vec<csv::StringRecord>)> {
     let (mut rdr, headers) = open_csv(path)?;
-    let mut rows = Vec::new();
-    for (i, r) in rdr.records().enumerate() {
-        rows.push(r.with_context(|| format!("{}: bad CSV at line {}", path.display(), i + 2))?);
-    }
+    let mut records = CsvRows::new(&mut rdr, path, headers.len());
+    let rows = records
+        .by_ref()
+        .map(|row| row.map(|(_, rec)| rec))
+        .collect::<Result<Vec<_>>>()?;
+    cut.extend(records.cut_tail.take());
     Ok((headers, rows))
 }
 
@@ -160,7 +168,8 @@ pub fn csv_extracts_to_replay_csv(
     att: Option<&Path>,
     out: &Path,
 ) -> Result<ImportSummary> {
-    let (h, rows) = read_table(imu)?;
+    let mut cut = Vec::new();
+    let (h, rows) = read_table(imu, &mut cut)?;
     let ti = time_column(&h, imu)?;
     let layout = imu_layout(&h).with_context(|| {
         format!(
@@ -213,7 +222,7 @@ pub fn csv_extracts_to_replay_csv(
     let slot = |x: f64| t.partition_point(|v| *v < x);
     let mut gnss_rows: Vec<Option<[f64; 3]>> = vec![None; n];
     if let Some(p) = gnss {
-        let (h, rows) = read_table(p)?;
+        let (h, rows) = read_table(p, &mut cut)?;
         let ti = time_column(&h, p)?;
         let f = |name: &str| h.iter().position(|x| x.trim() == name);
         let v = ["vel_n_m_s", "vel_e_m_s", "vel_d_m_s"].map(&f);
@@ -241,7 +250,7 @@ pub fn csv_extracts_to_replay_csv(
     }
     let mut att_rows: Vec<Option<[f64; 3]>> = vec![None; n];
     if let Some(p) = att {
-        let (h, rows) = read_table(p)?;
+        let (h, rows) = read_table(p, &mut cut)?;
         let ti = time_column(&h, p)?;
         let f = |name: &str| h.iter().position(|x| x.trim() == name);
         let q = ["q_w", "q_x", "q_y", "q_z"].map(&f);
@@ -269,7 +278,7 @@ pub fn csv_extracts_to_replay_csv(
             }
         }
     }
-    write_replay_csv(
+    let mut summary = write_replay_csv(
         out,
         &ReplayRows {
             t,
@@ -277,7 +286,9 @@ pub fn csv_extracts_to_replay_csv(
             gnss: gnss_rows,
             att: att_rows,
         },
-    )
+    )?;
+    summary.ended_early = (!cut.is_empty()).then(|| cut.join("; "));
+    Ok(summary)
 }
 
 #[cfg(test)]

@@ -445,9 +445,14 @@ pub fn log_to_replay_csv(input: &Path, out: &Path) -> Result<ImportSummary> {
 }
 
 /// Opens a CSV (cells trimmed) and reads its header row; errors name the file.
+///
+/// The reader is flexible (rows may differ in length from the header) so
+/// that [`CsvRows`] can tell a log cut mid-row at its end from a malformed
+/// row inside it; read its rows through [`CsvRows`].
 pub fn open_csv(path: &Path) -> Result<(csv::Reader<std::fs::File>, csv::StringRecord)> {
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
+        .flexible(true)
         .from_path(path)
         .with_context(|| format!("cannot open {}", path.display()))?;
     let headers = rdr
@@ -455,4 +460,75 @@ pub fn open_csv(path: &Path) -> Result<(csv::Reader<std::fs::File>, csv::StringR
         .with_context(|| format!("{}: no header row", path.display()))?
         .clone();
     Ok((rdr, headers))
+}
+
+/// The data rows of a CSV opened with [`open_csv`], each with its line
+/// number (the header is line 1).
+///
+/// A logger that stops mid-write (power cut, crash, a file copied while
+/// open) leaves a last row with fewer cells than the header: that row is
+/// dropped and [`CsvRows::cut_tail`] says so, as the binary log readers stop
+/// at a cut record. A row of the wrong length anywhere else is an error
+/// naming the file and the line, and so is a CSV syntax error.
+pub struct CsvRows<'a> {
+    records: std::iter::Peekable<csv::StringRecordsIter<'a, std::fs::File>>,
+    path: &'a Path,
+    width: usize,
+    line: usize,
+    /// Set when the last row was cut short and dropped: one line naming the
+    /// file, the line and the cells it had, for stderr.
+    pub cut_tail: Option<String>,
+}
+
+impl<'a> CsvRows<'a> {
+    /// The rows of `rdr`, whose header row (read by [`open_csv`]) has
+    /// `width` cells; `path` names the file in errors.
+    pub fn new(rdr: &'a mut csv::Reader<std::fs::File>, path: &'a Path, width: usize) -> Self {
+        Self {
+            records: rdr.records().peekable(),
+            path,
+            width,
+            line: 1,
+            cut_tail: None,
+        }
+    }
+}
+
+impl Iterator for CsvRows<'_> {
+    type Item = Result<(usize, csv::StringRecord)>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let rec = self.records.next()?;
+        self.line += 1;
+        let line = self.line;
+        let rec = match rec {
+            Ok(rec) => rec,
+            Err(e) => {
+                return Some(Err(anyhow::Error::new(e).context(format!(
+                    "{}: bad CSV at line {line}",
+                    self.path.display()
+                ))))
+            }
+        };
+        if rec.len() == self.width {
+            return Some(Ok((line, rec)));
+        }
+        if rec.len() < self.width && self.records.peek().is_none() {
+            self.cut_tail = Some(format!(
+                "{}: the last row (line {line}) has {} of {} cells: the log ends mid-row; read up \
+                 to line {}",
+                self.path.display(),
+                rec.len(),
+                self.width,
+                line - 1
+            ));
+            return None;
+        }
+        Some(Err(anyhow::anyhow!(
+            "{}: bad CSV at line {line}: {} cells, the header has {}",
+            self.path.display(),
+            rec.len(),
+            self.width
+        )))
+    }
 }

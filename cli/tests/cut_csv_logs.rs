@@ -1,0 +1,91 @@
+//! A CSV log cut mid-write (the logger lost power, the file was copied while
+//! open) ends in a row with fewer cells than the header: the readers drop
+//! that row with a warning naming the file and line, as the binary log
+//! readers stop at a cut record, and replay everything before it. A short
+//! row anywhere else is still an error naming the file and the line.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)] // test code
+
+use std::path::{Path, PathBuf};
+
+use imu_fdi_cli::eval::parity_replay::read_imu_log;
+
+fn log171() -> String {
+    std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/ap_log171_3imu.csv"),
+    )
+    .unwrap()
+}
+
+fn write(tag: &str, text: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("imu-fdi-cut-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(format!("{tag}.csv"));
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// The first `rows` data rows of log171, and then the start of the next
+/// row cut after `cells` of its cells (no newline: the write stopped there).
+fn cut_after(rows: usize, cells: usize) -> (String, usize) {
+    let text = log171();
+    let mut lines = text.lines();
+    let mut out = String::new();
+    for _ in 0..=rows {
+        out.push_str(lines.next().unwrap());
+        out.push('\n');
+    }
+    let next: Vec<&str> = lines.next().unwrap().split(',').collect();
+    out.push_str(&next[..cells].join(","));
+    (out, rows + 2)
+}
+
+#[test]
+fn a_log_cut_mid_row_is_read_up_to_the_cut_with_a_warning() {
+    let (text, cut_line) = cut_after(3000, 8);
+    let p = write("cut", &text);
+    let log = read_imu_log(&p).expect("a cut log is read");
+    assert_eq!(log.t.len(), 3000, "every complete row is kept");
+    assert_eq!(log.skipped, 0);
+    let warning = log
+        .warnings
+        .iter()
+        .find(|w| w.contains("ends mid-row"))
+        .expect("the cut is reported");
+    assert!(warning.contains("cut.csv"), "{warning}");
+    assert!(warning.contains(&format!("line {cut_line}")), "{warning}");
+    assert!(warning.contains("8 of 19 cells"), "{warning}");
+}
+
+#[test]
+fn a_short_row_inside_the_log_is_an_error_naming_file_and_line() {
+    let (head, short_line) = cut_after(3000, 8);
+    let tail: String = log171()
+        .lines()
+        .skip(3002)
+        .take(100)
+        .map(|l| format!("\n{l}"))
+        .collect();
+    let p = write("short", &format!("{head}{tail}\n"));
+    let err = format!("{:#}", read_imu_log(&p).expect_err("a short row mid-file"));
+    assert!(err.contains("short.csv"), "{err}");
+    assert!(err.contains(&format!("line {short_line}")), "{err}");
+    assert!(err.contains("8 cells, the header has 19"), "{err}");
+}
+
+#[test]
+fn the_binary_replays_a_cut_log_and_warns_on_stderr() {
+    let (text, cut_line) = cut_after(4000, 5);
+    let p = write("cut_bin", &text);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_imu-fdi-sim"))
+        .args(["parity-replay", p.to_str().unwrap(), "--json"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains(&format!("cut_bin.csv: the last row (line {cut_line})")),
+        "{stderr}"
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(json["gyro"]["monitoring_from_s"].as_f64().is_some());
+}
