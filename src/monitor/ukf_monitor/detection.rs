@@ -49,7 +49,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                             *v = T::zero();
                         }
                     }
-                    let k = (dt_learn / self.cfg.learn_tau_s).min(T::one());
+                    let k = (dt_learn / self.cfg.learn_tau_s).fmin(T::one());
                     self.nominal_bias += f * k;
                 }
             }
@@ -79,7 +79,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                     {
                         let step = *df * k;
                         let cap = *lim * dt_learn;
-                        *b += step.max(-cap).min(cap);
+                        *b += step.fmax(-cap).fmin(cap);
                     }
                 }
             }
@@ -90,7 +90,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             .max_nominal_bias
             .unwrap_or_else(|| self.cfg.min_fault * T::lit(MAX_NOMINAL_BIAS_FACTOR));
         for (b, m) in self.nominal_bias.iter_mut().zip(cap.iter()) {
-            *b = b.max(-*m).min(*m);
+            *b = b.fmax(-*m).fmin(*m);
         }
     }
 
@@ -191,7 +191,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             .zip(ev.full.iter())
         {
             if *full {
-                *s += (*t * *t).min(clip);
+                *s += (*t * *t).fmin(clip);
                 *n += T::one();
             }
         }
@@ -227,7 +227,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         {
             *c = if *n >= T::lit(2.0) * w {
                 let lower = *s / *n - T::lit(2.0) * sd / (*n / w).sqrt_fast();
-                (lower / white).max(T::one()).min(max)
+                (lower / white).fmax(T::one()).fmin(max)
             } else {
                 T::one()
             };
