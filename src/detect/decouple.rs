@@ -67,7 +67,7 @@ pub fn runtime_sign_matrix<T: Real>(
                 T::zero()
             };
             *s = v;
-            row_max = row_max.fmax(v.abs());
+            row_max = row_max.max(v.abs());
         }
         for (j, s) in scaled.iter().enumerate() {
             if row_max > T::zero() && s.abs() >= deadband * row_max {

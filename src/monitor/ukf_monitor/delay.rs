@@ -222,7 +222,7 @@ impl<T: Real> DelayEstimator<T> {
         let valid = self.block_valid;
         if valid > 0 {
             self.blocks += T::one();
-            let k = T::one() / self.blocks.fmin(T::lit(DELAY_TAU_BLOCKS));
+            let k = T::one() / self.blocks.min(T::lit(DELAY_TAU_BLOCKS));
             let norm = T::lit(2.0 * ATTITUDE.len() as f64);
             for (((c, acc), m), q) in self
                 .cost
@@ -242,7 +242,7 @@ impl<T: Real> DelayEstimator<T> {
                     let r = *a / *sg;
                     *m += (r - *m) * k;
                     *q += (r * r - *q) * k;
-                    spread += (*q - *m * *m).fmax(T::zero());
+                    spread += (*q - *m * *m).max(T::zero());
                 }
                 *c = spread / norm;
             }

@@ -49,7 +49,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                             *v = T::zero();
                         }
                     }
-                    let k = (dt_learn / self.cfg.learn_tau_s).fmin(T::one());
+                    let k = (dt_learn / self.cfg.learn_tau_s).min(T::one());
                     self.nominal_bias += f * k;
                 }
             }
@@ -191,7 +191,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             .zip(ev.full.iter())
         {
             if *full {
-                *s += (*t * *t).fmin(clip);
+                *s += (*t * *t).min(clip);
                 *n += T::one();
             }
         }
@@ -227,7 +227,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         {
             *c = if *n >= T::lit(2.0) * w {
                 let lower = *s / *n - T::lit(2.0) * sd / (*n / w).sqrt_fast();
-                (lower / white).fmax(T::one()).fmin(max)
+                (lower / white).max(T::one()).min(max)
             } else {
                 T::one()
             };

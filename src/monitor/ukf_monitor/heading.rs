@@ -204,7 +204,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let span = T::lit(age.max(1) as f64) * self.cfg.imu_period;
         let (an, ae) = ((a.x - b.x) / span, (a.y - b.y) / span);
         let a_h = (an * an + ae * ae).sqrt_fast();
-        let smallest = self.cfg.min_fault.x.fmin(self.cfg.min_fault.y);
+        let smallest = self.cfg.min_fault.x.min(self.cfg.min_fault.y);
         let h = &mut self.heading;
         h.contaminated = h.uncertainty * a_h > smallest * T::lit(HEADING_CONTAMINATION_FRACTION);
         h.block_z[0] += z[0] - z0[0];
@@ -235,19 +235,19 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             return;
         }
         let e = -cross / dot;
-        let sigma = self.cfg.meas_sigma.x.fmax(self.cfg.meas_sigma.y);
+        let sigma = self.cfg.meas_sigma.x.max(self.cfg.meas_sigma.y);
         let se = sigma * T::lit(core::f64::consts::SQRT_2) / dot.sqrt_fast();
         let max = T::lit(HEADING_OFFSET_MAX_DEG.to_radians());
         let significance = T::lit(HEADING_SIGNIFICANCE);
         let precise = se < T::lit(HEADING_MAX_SE_DEG.to_radians());
         if precise {
-            h.uncertainty = (e.abs() + significance * se).fmin(max);
+            h.uncertainty = (e.abs() + significance * se).min(max);
         }
         if e.abs() > significance * se && precise {
             let before = h.offset;
-            h.offset = (h.offset + e * T::lit(HEADING_GAIN)).fmax(-max).fmin(max);
+            h.offset = (h.offset + e * T::lit(HEADING_GAIN)).max(-max).min(max);
             let turn = h.offset - before;
-            h.uncertainty = (e.abs() * T::lit(1.0 - HEADING_GAIN) + significance * se).fmin(max);
+            h.uncertainty = (e.abs() * T::lit(1.0 - HEADING_GAIN) + significance * se).min(max);
             h.n = T::zero();
             h.sum_h = [T::zero(); 2];
             h.sum_z = [T::zero(); 2];

@@ -117,7 +117,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             for w in self.windows.iter_mut() {
                 w.clear();
             }
-            self.stats_holdoff = self.stats_holdoff.fmax(self.cfg.converge_s);
+            self.stats_holdoff = self.stats_holdoff.max(self.cfg.converge_s);
         }
     }
 
@@ -169,6 +169,6 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             w.clear();
         }
         self.persistence.reset();
-        self.stats_holdoff = self.stats_holdoff.fmax(self.cfg.converge_s);
+        self.stats_holdoff = self.stats_holdoff.max(self.cfg.converge_s);
     }
 }
