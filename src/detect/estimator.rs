@@ -97,7 +97,7 @@ pub fn estimate_corrected<T: Real>(
     // A column no monitored channel sees has a zero diagonal: decouple it.
     let mut max_diag = T::zero();
     for a in 0..6 {
-        max_diag = max_diag.max(normal[(a, a)]);
+        max_diag = max_diag.fmax(normal[(a, a)]);
     }
     for (a, obs) in observed.iter_mut().enumerate() {
         *obs = columns.get(a).copied().unwrap_or(false) && normal[(a, a)] > max_diag * T::lit(1e-9);

@@ -17,7 +17,7 @@ pub fn is_identity<T: Real, const R: usize, const C: usize>(m: &SMatrix<T, R, C>
     m.as_slice().chunks_exact(R).enumerate().all(|(j, col)| {
         col.iter().enumerate().all(|(i, &v)| {
             if i == j {
-                v == one || (v.finite() && (v - one).abs() <= v.abs().max(one) * rel)
+                v == one || (v.finite() && (v - one).abs() <= v.abs().fmax(one) * rel)
             } else {
                 v == T::zero()
             }

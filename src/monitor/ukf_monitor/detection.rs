@@ -79,7 +79,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                     {
                         let step = *df * k;
                         let cap = *lim * dt_learn;
-                        *b += step.max(-cap).min(cap);
+                        *b += step.fmax(-cap).fmin(cap);
                     }
                 }
             }
@@ -90,7 +90,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             .max_nominal_bias
             .unwrap_or_else(|| self.cfg.min_fault * T::lit(MAX_NOMINAL_BIAS_FACTOR));
         for (b, m) in self.nominal_bias.iter_mut().zip(cap.iter()) {
-            *b = b.max(-*m).min(*m);
+            *b = b.fmax(-*m).fmin(*m);
         }
     }
 

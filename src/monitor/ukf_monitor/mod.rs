@@ -264,7 +264,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         health.saturated = saturated;
         let elapsed = dt_use.unwrap_or(T::zero());
-        self.stats_holdoff = (self.stats_holdoff - elapsed).max(T::zero());
+        self.stats_holdoff = (self.stats_holdoff - elapsed).fmax(T::zero());
         // Two loops, not one over a chained iterator: the compiler unrolls
         // these, not the chain (issue 17).
         for s in self.since_seen.iter_mut() {
@@ -559,7 +559,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             .ukf
             .covariance()
             .diagonal()
-            .map(|v| v.max(T::zero()).sqrt_fast());
+            .map(|v| v.fmax(T::zero()).sqrt_fast());
         r.nominal_bias = self.nominal_bias;
         let mut corrected = imu - self.nominal_bias;
         for ((c, s), f) in corrected
