@@ -27,6 +27,12 @@ fn tmp(name: &str) -> PathBuf {
 /// Fault-estimate RMSE per channel (m/s², °/s) of `kind` replayed on S3
 /// seed `seed` written as a SPEC §10 CSV.
 fn replay_rmse(csv: &std::path::Path, kind: MonitorKind) -> [f64; 6] {
+    replay_rmse_with(csv, kind, true)
+}
+
+/// [`replay_rmse`], the UKF monitor with its tracking estimate (`track`)
+/// or SPEC §6's window mean `M⁺ r̄` (`fault_psd: None`).
+fn replay_rmse_with(csv: &std::path::Path, kind: MonitorKind, track: bool) -> [f64; 6] {
     let s3 = Scenario::s3();
     let opts = ReplayOptions {
         monitor: kind,
@@ -36,7 +42,13 @@ fn replay_rmse(csv: &std::path::Path, kind: MonitorKind) -> [f64; 6] {
         csv,
         None,
         None,
-        |_| monitor_config(&s3, &RunOptions::default()),
+        |_| {
+            let mut c = monitor_config(&s3, &RunOptions::default());
+            if !track {
+                c.fault_psd = None;
+            }
+            c
+        },
         &opts,
     )
     .unwrap();
@@ -53,43 +65,63 @@ fn replay_rmse(csv: &std::path::Path, kind: MonitorKind) -> [f64; 6] {
     })
 }
 
-/// The OTSUKF replayed from a CSV estimates S3's faults within 20 % of the
-/// 12-state augmented UKF run on the same samples with the same model,
+/// Both monitors replayed from a CSV estimate S3's faults within 20 % of
+/// the 12-state augmented UKF run on the same samples with the same model,
 /// noise and fault random walk (`OtsukfConfig::from_base` of the replay's
-/// configuration), channel by channel, summed over three seeds. The UKF
-/// innovation monitor's window-mean estimate is printed beside it: it does
-/// not meet the 20 % (about 2× on the accelerometers, README).
+/// configuration), channel by channel, summed over three seeds: the OTSUKF,
+/// and the UKF innovation monitor with its tracking estimate
+/// (`fault_track.rs`, same fault random walk). SPEC §6's window mean
+/// `M⁺ r̄`, which the UKF monitor reported before, does not (1.3–1.9×).
 #[test]
-fn otsukf_replay_estimates_faults_within_20_percent_of_the_augmented_ukf() {
+fn both_monitors_replay_estimates_faults_within_20_percent_of_the_augmented_ukf() {
     let s3 = Scenario::s3();
     let mut base = monitor_config::<f64>(&s3, &RunOptions::default());
     base.imu_period = 1.0 / s3.imu_rate_hz;
     let aug_cfg = OtsukfConfig::from_base(base);
     let (mut ots, mut ukf, mut aug) = ([0.0; 6], [0.0; 6], [0.0; 6]);
+    let mut win = [0.0; 6];
     let seeds = [1u64, 2, 3];
     for seed in seeds {
         let csv = tmp(&format!("s3-{seed}.csv"));
         write_simulated(&s3, seed, &csv).unwrap();
         let o = replay_rmse(&csv, MonitorKind::Otsukf);
         let u = replay_rmse(&csv, MonitorKind::Ukf);
+        let w = replay_rmse_with(&csv, MonitorKind::Ukf, false);
         let a = run_augmented(&s3, seed, &aug_cfg).unwrap().rmse();
         for c in 0..6 {
             ots[c] += o[c] * o[c] / seeds.len() as f64;
             ukf[c] += u[c] * u[c] / seeds.len() as f64;
+            win[c] += w[c] * w[c] / seeds.len() as f64;
             aug[c] += a[6 + c] * a[6 + c] / seeds.len() as f64;
         }
     }
     let (ots, ukf, aug) = (ots.map(f64::sqrt), ukf.map(f64::sqrt), aug.map(f64::sqrt));
+    let win = win.map(f64::sqrt);
     println!(
-        "S3 seeds {seeds:?}, fault RMSE (m/s², °/s):\n  otsukf replay {ots:.4?}\n  ukf replay    {ukf:.4?}\n  augmented UKF {aug:.4?}\n  otsukf/aug {:.3?}\n  ukf/aug    {:.3?}",
+        "S3 seeds {seeds:?}, fault RMSE (m/s², °/s):\n  otsukf replay {ots:.4?}\n  ukf replay    {ukf:.4?}\n  ukf window    {win:.4?}\n  augmented UKF {aug:.4?}\n  otsukf/aug {:.3?}\n  ukf/aug    {:.3?}\n  window/aug {:.3?}",
         core::array::from_fn::<f64, 6, _>(|c| ots[c] / aug[c]),
         core::array::from_fn::<f64, 6, _>(|c| ukf[c] / aug[c]),
+        core::array::from_fn::<f64, 6, _>(|c| win[c] / aug[c]),
     );
     for c in 0..6 {
         assert!(
             ots[c] <= 1.2 * aug[c],
             "channel {c}: OTSUKF {} vs augmented {}",
             ots[c],
+            aug[c]
+        );
+        // Measured 0.94–1.06×.
+        assert!(
+            ukf[c] <= 1.2 * aug[c],
+            "channel {c}: UKF monitor {} vs augmented {}",
+            ukf[c],
+            aug[c]
+        );
+        // The window mean: 1.30–1.86× (measured).
+        assert!(
+            win[c] > 1.25 * aug[c],
+            "channel {c}: window mean {} vs augmented {}",
+            win[c],
             aug[c]
         );
     }
