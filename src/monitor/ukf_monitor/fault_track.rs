@@ -110,8 +110,12 @@ impl<T: Real> FaultTracker<T> {
     }
 
     /// One innovation `r` of variance `var` on a channel whose measurement
-    /// row is `h` (as a column; `r = −hᵀ e⁻ + ν`).
-    pub fn observe(&mut self, h: &StateVec<T>, r: T, var: T) {
+    /// row is `h` (as a column; `r = −hᵀ e⁻ + ν`). An innovation more than
+    /// `gate` σ from what the tracked fault predicts is an aiding outlier,
+    /// not fault evidence, and is skipped. The filter's own gate is not
+    /// used: it judges the innovation against a fault-free prediction, so it
+    /// rejects exactly the epochs a large fault makes most informative.
+    pub fn observe(&mut self, h: &StateVec<T>, r: T, var: T, gate: T) {
         let ue = -(self.p_ee * h);
         let uf = -(self.p_ef.tr_mul(h));
         let s = var - h.dot(&ue);
@@ -119,6 +123,9 @@ impl<T: Real> FaultTracker<T> {
             return;
         }
         let y = r + h.dot(&self.e);
+        if y * y > gate * gate * s {
+            return;
+        }
         let inv = T::one() / s;
         self.e += ue * (y * inv);
         self.f += uf * (y * inv);
@@ -288,7 +295,7 @@ mod tests {
             let s = (h * pb * h.transpose())[(0, 0)] + r[i];
             let kb = pb * h.transpose() / s;
             let innov = z - (h * xb)[(0, 0)];
-            tr.observe(&hc, innov, s);
+            tr.observe(&hc, innov, s, 8.0);
             xb += kb * innov;
             let tm = Mat6::identity() - kb * h;
             pb = tm * pb;
@@ -308,5 +315,24 @@ mod tests {
         // And it found the faults.
         let (fh, _) = tr.estimate();
         assert!((fh[0] - 0.5).abs() < 0.1, "{fh}");
+        // An aiding outlier (100 m/s off) moves nothing.
+        let before = tr.clone();
+        tr.observe(
+            &StateVec::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+            100.0,
+            r[0],
+            8.0,
+        );
+        assert_eq!(tr.estimate(), before.estimate());
+        // A non-finite input restarts the estimate instead of poisoning it.
+        tr.observe(
+            &StateVec::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+            0.0,
+            f64::NAN,
+            8.0,
+        );
+        tr.filter_update(&Mat6::identity(), &Mat6::from_element(f64::NAN));
+        tr.filter_update(&Mat6::identity(), &Mat6::zeros());
+        assert!(tr.estimate().0.iter().all(|v| v.is_finite()));
     }
 }

@@ -543,13 +543,17 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 if let Some(w) = self.windows.get_mut(i) {
                     w.push(v);
                 }
-                if track {
-                    // Per sample, the time correlation the learnt inflation
-                    // measured on the window means is taken as extra variance.
-                    let c = self.inflation.get(i).copied().unwrap_or(T::one());
-                    self.tracker
-                        .observe(&h.row(i).transpose(), d.innovation, d.variance * c);
-                }
+            }
+            if track && record {
+                // Per sample, the time correlation the learnt inflation
+                // measured on the window means is taken as extra variance.
+                let c = self.inflation.get(i).copied().unwrap_or(T::one());
+                self.tracker.observe(
+                    &h.row(i).transpose(),
+                    d.innovation,
+                    d.variance * c,
+                    self.cfg.gate_sigma,
+                );
             }
         }
         self.report.detail.diag = out.diag;
