@@ -454,6 +454,9 @@ impl<T: Real> UkfMonitorConfig<T> {
                 return Err(ConfigError::NotCompiled("estimate_heading_offset"));
             }
         }
+        if !cfg!(feature = "fault-tracking") && self.fault_psd.is_some() {
+            return Err(ConfigError::NotCompiled("fault_psd"));
+        }
         Ok(())
     }
 }

@@ -21,8 +21,9 @@
 //!
 //! The 12-state covariance is kept in 6×6 blocks `P_ee`, `P_ef`, `P_ff`.
 
+use crate::filter::ChannelDiag;
 use crate::math::Real;
-use crate::model::{ImuVec, Mat6, StateVec, NX};
+use crate::model::{ImuVec, Mat6, StateVec, VehicleModel, NX, NZ};
 
 /// Tracking fault estimator state (see the module notes).
 #[derive(Debug, Clone)]
@@ -94,8 +95,36 @@ impl<T: Real> FaultTracker<T> {
         }
     }
 
+    /// One IMU step of the transition between aiding epochs: the monitor's
+    /// first-order `Φ ≈ I + A dt`, as for its sensitivity `X`.
+    #[inline(never)] // off `predict`'s frame and inlined code (issue 17)
+    pub fn advance(&mut self, a: &Mat6<T>, dt: T) {
+        self.phi += VehicleModel::mul_state_jacobian(a, &self.phi) * dt;
+        self.elapsed += dt;
+    }
+
+    /// Every fused or gate-rejected innovation of an update (channel `i`:
+    /// row `i` of `h`, variance `S_ii` × the learnt inflation: the time
+    /// correlation it measured on the window means, taken as extra
+    /// variance per sample).
+    #[inline(never)] // off `update`'s frame and inlined code (issue 17)
+    pub fn observe_all(
+        &mut self,
+        diag: &[ChannelDiag<T>; NZ],
+        h: &Mat6<T>,
+        inflation: &[T; NZ],
+        gate: T,
+    ) {
+        for ((i, d), c) in diag.iter().enumerate().zip(inflation.iter()) {
+            if d.available {
+                self.observe(&h.row(i).transpose(), d.innovation, d.variance * *c, gate);
+            }
+        }
+    }
+
     /// Propagation to this aiding epoch: `x_prior` is the sensitivity `X⁻`
     /// now, `psd` the fault's random-walk spectral density.
+    #[inline(never)] // off `update`'s frame and inlined code (issue 17)
     pub fn propagate(&mut self, x_prior: &Mat6<T>, psd: &ImuVec<T>) {
         let phi = self.phi;
         let gamma = x_prior - phi * self.x_post;
@@ -134,9 +163,11 @@ impl<T: Real> FaultTracker<T> {
         self.p_ff -= uf * uf.transpose() * inv;
     }
 
-    /// The monitor's filter update `e⁺ = (I − K H) e⁻`, given `t = I − K H`,
-    /// and `x_post` the sensitivity after it.
-    pub fn filter_update(&mut self, t: &Mat6<T>, x_post: &Mat6<T>) {
+    /// The monitor's filter update `e⁺ = (I − K H) e⁻` (gain `k`,
+    /// measurement Jacobian `h`), and `x_post` the sensitivity after it.
+    #[inline(never)] // off `update`'s frame and inlined code (issue 17)
+    pub fn filter_update(&mut self, k: &Mat6<T>, h: &Mat6<T>, x_post: &Mat6<T>) {
+        let t = &(Mat6::identity() - k * h);
         self.e = t * self.e;
         self.p_ee = t * self.p_ee * t.transpose();
         self.p_ef = t * self.p_ef;
@@ -300,7 +331,9 @@ mod tests {
             let tm = Mat6::identity() - kb * h;
             pb = tm * pb;
             xs = tm * xs;
-            tr.filter_update(&tm, &xs);
+            let kb6 = Mat6::from_fn(|r, c| if c == i { kb[r] } else { 0.0 });
+            let h6 = Mat6::from_fn(|r, c| if r == i && c == i { 1.0 } else { 0.0 });
+            tr.filter_update(&kb6, &h6, &xs);
             let (fh, sd) = tr.estimate();
             for c in 0..6 {
                 let scale = sigma0[c];
@@ -331,8 +364,9 @@ mod tests {
             f64::NAN,
             8.0,
         );
-        tr.filter_update(&Mat6::identity(), &Mat6::from_element(f64::NAN));
-        tr.filter_update(&Mat6::identity(), &Mat6::zeros());
+        let z = Mat6::zeros();
+        tr.filter_update(&z, &z, &Mat6::from_element(f64::NAN));
+        tr.filter_update(&z, &z, &z);
         assert!(tr.estimate().0.iter().all(|v| v.is_finite()));
     }
 }

@@ -403,12 +403,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // every update, while it saves a 6×6 product per IMU period.
         // X ← X + (A X + B) dt: one scaling by dt instead of two.
         self.sensitivity += (VehicleModel::mul_state_jacobian(&a, &self.sensitivity) + b) * dt;
-        if self.tracker.active {
-            // The same first-order transition, for the fault's state
-            // deviation between aiding epochs.
-            let t = &mut self.tracker;
-            t.phi += VehicleModel::mul_state_jacobian(&a, &t.phi) * dt;
-            t.elapsed += dt;
+        if self.tracking_on() && self.tracker.active {
+            self.tracker.advance(&a, dt);
         }
         self.last_input_at = Some((x, trig));
         // The state history serves a configured or estimated aiding latency.
@@ -501,13 +497,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             h * self.sensitivity
         };
         let record = self.stats_holdoff <= T::zero();
-        let track = match self.cfg.fault_psd {
-            Some(psd) if self.tracker.active => {
+        let track = self.tracking_on() && self.tracker.active;
+        if track {
+            if let Some(psd) = self.cfg.fault_psd {
                 self.tracker.propagate(&self.sensitivity, &psd);
-                true
             }
-            _ => false,
-        };
+        }
         let mut rejected = false;
         for (i, d) in out.diag.iter().enumerate() {
             if !d.available {
@@ -544,24 +539,16 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                     w.push(v);
                 }
             }
-            if track && record {
-                // Per sample, the time correlation the learnt inflation
-                // measured on the window means is taken as extra variance.
-                let c = self.inflation.get(i).copied().unwrap_or(T::one());
-                self.tracker.observe(
-                    &h.row(i).transpose(),
-                    d.innovation,
-                    d.variance * c,
-                    self.cfg.gate_sigma,
-                );
-            }
+        }
+        if track && record {
+            self.tracker
+                .observe_all(&out.diag, &h, &self.inflation, self.cfg.gate_sigma);
         }
         self.report.detail.diag = out.diag;
         // (I − K H) X = X − K (H X), with H X already at hand.
         self.sensitivity -= out.gain * hx;
         if track {
-            self.tracker
-                .filter_update(&(Mat6::identity() - out.gain * h), &self.sensitivity);
+            self.tracker.filter_update(&out.gain, &h, &self.sensitivity);
         }
         // The correction moved the current state: shift the history with it so
         // the next delayed measurement sees a consistent past.
