@@ -23,9 +23,12 @@
 
 use crate::filter::ChannelDiag;
 use crate::math::Real;
-use crate::model::{ImuVec, Mat6, StateVec, VehicleModel, NX, NZ};
+use crate::model::{ImuVec, Mat6, NX, NZ};
+#[cfg(feature = "fault-tracking")]
+use crate::model::{StateVec, VehicleModel};
 
 /// Tracking fault estimator state (see the module notes).
+#[cfg(feature = "fault-tracking")]
 #[derive(Debug, Clone)]
 pub(super) struct FaultTracker<T> {
     /// Running (started at monitoring start, stopped at alignment).
@@ -47,6 +50,7 @@ pub(super) struct FaultTracker<T> {
     sigma0: ImuVec<T>,
 }
 
+#[cfg(feature = "fault-tracking")]
 impl<T: Real> FaultTracker<T> {
     /// An inactive tracker.
     pub fn new() -> Self {
@@ -197,7 +201,51 @@ impl<T: Real> FaultTracker<T> {
     }
 }
 
-#[cfg(test)]
+/// Without the feature `fault-tracking`: an empty stand-in with the same
+/// calls, so the monitor carries no tracker state (≈ 0.8 KB in f32).
+#[cfg(not(feature = "fault-tracking"))]
+#[derive(Debug, Clone)]
+pub(super) struct FaultTracker<T> {
+    /// Never set: the tracker does not run.
+    pub active: bool,
+    _t: core::marker::PhantomData<T>,
+}
+
+#[cfg(not(feature = "fault-tracking"))]
+impl<T: Real> FaultTracker<T> {
+    /// An inactive tracker.
+    pub fn new() -> Self {
+        Self {
+            active: false,
+            _t: core::marker::PhantomData,
+        }
+    }
+    /// Does nothing (the configuration is refused without the feature).
+    pub fn start(&mut self, _sigma0: &ImuVec<T>, _x: &Mat6<T>) {}
+    /// No estimate.
+    pub fn estimate(&self) -> (ImuVec<T>, ImuVec<T>) {
+        (ImuVec::zeros(), ImuVec::zeros())
+    }
+    /// Does nothing.
+    pub fn forget_states(&mut self, _reset: &[bool; NX]) {}
+    /// Does nothing.
+    pub fn advance(&mut self, _a: &Mat6<T>, _dt: T) {}
+    /// Does nothing.
+    pub fn observe_all(
+        &mut self,
+        _diag: &[ChannelDiag<T>; NZ],
+        _h: &Mat6<T>,
+        _inflation: &[T; NZ],
+        _gate: T,
+    ) {
+    }
+    /// Does nothing.
+    pub fn propagate(&mut self, _x_prior: &Mat6<T>, _psd: &ImuVec<T>) {}
+    /// Does nothing.
+    pub fn filter_update(&mut self, _k: &Mat6<T>, _h: &Mat6<T>, _x_post: &Mat6<T>) {}
+}
+
+#[cfg(all(test, feature = "fault-tracking"))]
 mod tests {
     #![allow(clippy::unwrap_used, clippy::indexing_slicing)] // test code
     use super::*;
