@@ -1,6 +1,7 @@
-//! The two fault estimators of SPEC §6 on constant faults held long enough
-//! for the filter to reach steady state: the corrected mapping `M⁺ r̄` is
-//! unbiased, [UKF] §4 as written over-estimates by ≈ T/(K·dt).
+//! The fault estimators on constant faults held long enough for the filter
+//! to reach steady state: the report's estimate (the tracking estimate by
+//! default, `UkfMonitorConfig::fault_psd`) is unbiased, [UKF] §4 as written
+//! over-estimates by ≈ T/(K·dt).
 
 #![allow(
     clippy::unwrap_used,

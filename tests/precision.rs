@@ -59,11 +59,13 @@ fn f32_agrees_with_f64_fault_free_within_a_tenth_sigma() {
         &run::<f64>(&scn, 3, &opts).unwrap(),
     );
     println!(
-        "fault-free 10 min: worst state difference {:.3} σ, flag mismatches {}",
-        g.worst_sigma, g.flag_mismatches
+        "fault-free 10 min: worst state difference {:.3} σ, flag mismatches {}, worst fault-estimate difference {:.4} of min fault",
+        g.worst_sigma, g.flag_mismatches, g.worst_fhat
     );
     assert!(g.worst_sigma < 0.1);
     assert_eq!(g.flag_mismatches, 0);
+    // The tracking fault estimate's covariance runs for the whole 10 min.
+    assert!(g.worst_fhat < 0.01);
 }
 
 #[test]

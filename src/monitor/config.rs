@@ -197,6 +197,14 @@ pub struct UkfMonitorConfig<T> {
     /// 46 and 12 post-clear events per hour on seeds 500–519 and 600–619,
     /// 20 and 1 with two).
     pub estimate_heading_offset: bool,
+    /// Random-walk spectral density of the fault, per channel
+    /// ((m/s²)²/s, (rad/s)²/s), for the tracking fault estimate reported
+    /// while monitoring (issue 15; `ukf_monitor/fault_track.rs`): a Kalman
+    /// filter on the fault and on the state deviation it has caused, fed by
+    /// every innovation, instead of the window mean mapped by `M⁺`
+    /// (`None`, SPEC §6). Larger follows faster changes with more noise.
+    /// Detection uses the window means either way.
+    pub fault_psd: Option<ImuVec<T>>,
     /// An aiding channel silent for this long is "not monitored", s.
     pub aiding_timeout_s: T,
     /// Identical consecutive IMU samples before the IMU is reported frozen.
@@ -286,6 +294,16 @@ impl<T: Real> UkfMonitorConfig<T> {
             aiding_delay_s: T::zero(),
             estimate_aiding_delay: false,
             estimate_heading_offset: false,
+            // The OTSUKF's fault random walk (`OtsukfConfig::from_base`):
+            // the same fault model for both monitors' estimates.
+            fault_psd: Some(ImuVec::new(
+                T::lit(0.05),
+                T::lit(0.05),
+                T::lit(0.05),
+                T::lit((0.5 * deg) * (0.5 * deg)),
+                T::lit((0.5 * deg) * (0.5 * deg)),
+                T::lit((0.5 * deg) * (0.5 * deg)),
+            )),
             aiding_timeout_s: T::lit(1.0),
             frozen_samples: 20,
         }
@@ -381,7 +399,7 @@ impl<T: Real> UkfMonitorConfig<T> {
         if let Some(&(field, _)) = positive.iter().find(|(_, ok)| !ok) {
             return Err(ConfigError::NonPositive(field));
         }
-        let in_range: [(&'static str, bool); 10] = [
+        let in_range: [(&'static str, bool); 11] = [
             ("lever_arm", self.lever_arm.iter().all(|v| v.finite())),
             (
                 "cos_pitch_min",
@@ -407,6 +425,10 @@ impl<T: Real> UkfMonitorConfig<T> {
                 self.max_innovation_inflation.finite() && self.max_innovation_inflation >= T::one(),
             ),
             ("learn_s", non_neg(self.learn_s)),
+            (
+                "fault_psd",
+                self.fault_psd.is_none_or(|m| m.iter().all(|v| pos(*v))),
+            ),
             (
                 "drift_rate_limit",
                 self.drift_rate_limit.iter().all(|v| non_neg(*v)),

@@ -142,6 +142,14 @@ pub struct UkfDetail<T> {
     /// statistic (1 until learning ends, or when disabled; see
     /// `UkfMonitorConfig::max_innovation_inflation`).
     pub innovation_inflation: [T; NZ],
+    /// The window-mean estimate `M⁺ r̄` (SPEC §6). It is the report's
+    /// [`Report::fault_estimate`] when `UkfMonitorConfig::fault_psd` is
+    /// `None`; otherwise that is the tracking estimate and this is kept
+    /// for comparison.
+    pub fault_estimate_window: ImuVec<T>,
+    /// Standard deviation of the tracking fault estimate (0 with the
+    /// window-mean estimate).
+    pub fault_sigma: ImuVec<T>,
 }
 
 /// What only the OTSUKF monitor reports.
@@ -163,6 +171,8 @@ impl<T: Real> Default for UkfDetail<T> {
             diag: [ChannelDiag::default(); NZ],
             covariance_resets: 0,
             innovation_inflation: [T::one(); NZ],
+            fault_estimate_window: ImuVec::zeros(),
+            fault_sigma: ImuVec::zeros(),
         }
     }
 }

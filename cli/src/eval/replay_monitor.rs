@@ -21,7 +21,8 @@ pub enum MonitorKind {
 /// The part of either monitor's detail the replay writes.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ReplayDetail {
-    /// Standard deviation of the fault estimate (OTSUKF only).
+    /// Standard deviation of the fault estimate (OTSUKF; UKF monitor with
+    /// the tracking estimate, 0 with the window mean).
     pub fault_sigma: Option<ImuVec<f64>>,
     /// The learned innovation inflation per aiding channel (UKF monitor).
     pub innovation_inflation: Option<[f64; 6]>,
@@ -72,7 +73,7 @@ impl ReplayMonitor {
                 let r = m.step(imu, dt, aiding);
                 let (delay, heading) = (m.aiding_delay_estimate(), m.heading_offset_estimate());
                 r.map_detail(|d| ReplayDetail {
-                    fault_sigma: None,
+                    fault_sigma: Some(d.fault_sigma),
                     aiding_delay_s: Some(delay),
                     heading_offset_rad: Some(heading),
                     innovation_inflation: Some(d.innovation_inflation),

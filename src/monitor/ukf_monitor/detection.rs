@@ -170,7 +170,22 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         self.report.detail.t_statistic = tstat;
         self.report.detail.innovation_flags = flags;
+        self.report.detail.fault_estimate_window = est;
         self.report.fault_estimate = est;
+        if self.tracker.active {
+            let (f, sd) = self.tracker.estimate();
+            let masked = |v: &ImuVec<T>| {
+                let mut v = *v;
+                for (x, m) in v.iter_mut().zip(monitored.iter()) {
+                    if !*m {
+                        *x = T::zero();
+                    }
+                }
+                v
+            };
+            self.report.fault_estimate = masked(&f);
+            self.report.detail.fault_sigma = masked(&sd);
+        }
         self.report.detail.fault_estimate_as_written = as_written;
     }
 

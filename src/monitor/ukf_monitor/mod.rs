@@ -20,6 +20,7 @@ use crate::stats::normal_upper_quantile;
 
 mod delay;
 mod detection;
+mod fault_track;
 mod heading;
 mod history;
 mod phase;
@@ -101,6 +102,8 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     learned_lag: usize,
     /// Heading offset of the attitude aiding (`heading.rs`).
     heading: heading::HeadingEstimator<T>,
+    /// The tracking fault estimate (`fault_track.rs`).
+    tracker: fault_track::FaultTracker<T>,
     history: heapless::HistoryBuf<StateVec<T>, { MAX_DELAY_STEPS + 1 }>,
     report: UkfReport<T>,
 }
@@ -162,6 +165,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             delay_estimator: DelayEstimator::new(),
             learned_lag: 0,
             heading: heading::HeadingEstimator::new(),
+            tracker: fault_track::FaultTracker::new(),
             history: heapless::HistoryBuf::new(),
             report: UkfReport::default(),
             cfg,
@@ -368,6 +372,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let s = self.cfg.initial_sigma;
         self.ukf.reset(x, Mat6::from_diagonal(&s.component_mul(&s)));
         self.sensitivity = Mat6::zeros();
+        self.tracker = fault_track::FaultTracker::new();
         self.phase = Phase::Converging;
         self.phase_time = T::zero();
     }
@@ -398,6 +403,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // every update, while it saves a 6×6 product per IMU period.
         // X ← X + (A X + B) dt: one scaling by dt instead of two.
         self.sensitivity += (VehicleModel::mul_state_jacobian(&a, &self.sensitivity) + b) * dt;
+        if self.tracker.active {
+            // The same first-order transition, for the fault's state
+            // deviation between aiding epochs.
+            let t = &mut self.tracker;
+            t.phi += VehicleModel::mul_state_jacobian(&a, &t.phi) * dt;
+            t.elapsed += dt;
+        }
         self.last_input_at = Some((x, trig));
         // The state history serves a configured or estimated aiding latency.
         if self.keeps_history() {
@@ -489,6 +501,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             h * self.sensitivity
         };
         let record = self.stats_holdoff <= T::zero();
+        let track = match self.cfg.fault_psd {
+            Some(psd) if self.tracker.active => {
+                self.tracker.propagate(&self.sensitivity, &psd);
+                true
+            }
+            _ => false,
+        };
         let mut rejected = false;
         for (i, d) in out.diag.iter().enumerate() {
             if !d.available {
@@ -525,10 +544,25 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                     w.push(v);
                 }
             }
+            if track && record {
+                // Per sample, the time correlation the learnt inflation
+                // measured on the window means is taken as extra variance.
+                let c = self.inflation.get(i).copied().unwrap_or(T::one());
+                self.tracker.observe(
+                    &h.row(i).transpose(),
+                    d.innovation,
+                    d.variance * c,
+                    self.cfg.gate_sigma,
+                );
+            }
         }
         self.report.detail.diag = out.diag;
         // (I − K H) X = X − K (H X), with H X already at hand.
         self.sensitivity -= out.gain * hx;
+        if track {
+            self.tracker
+                .filter_update(&(Mat6::identity() - out.gain * h), &self.sensitivity);
+        }
         // The correction moved the current state: shift the history with it so
         // the next delayed measurement sees a consistent past.
         if self.keeps_history() {

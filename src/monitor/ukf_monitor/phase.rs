@@ -26,6 +26,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             Some(Phase::Monitoring) => {
                 self.phase = Phase::Monitoring;
                 self.freeze_inflation();
+                // The fault estimate starts from "no fault", as uncertain
+                // as the smallest fault to detect.
+                if self.cfg.fault_psd.is_some() {
+                    self.tracker.start(&self.cfg.min_fault, &self.sensitivity);
+                }
                 for w in self.windows.iter_mut() {
                     w.clear();
                 }

@@ -156,6 +156,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 self.sensitivity.row_mut(i).fill(T::zero());
             }
         }
+        self.tracker.forget_states(reset);
         self.ukf.reset(x, p);
         // The state history (aiding latency) follows the re-aligned state.
         if self.delay_steps > 0 {
