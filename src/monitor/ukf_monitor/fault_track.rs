@@ -177,7 +177,7 @@ impl<T: Real> FaultTracker<T> {
 
     /// The fault estimate and its standard deviation.
     pub fn estimate(&self) -> (ImuVec<T>, ImuVec<T>) {
-        let sd = self.p_ff.diagonal().map(|v| v.max(T::zero()).sqrt_fast());
+        let sd = self.p_ff.diagonal().map(|v| v.fmax(T::zero()).sqrt_fast());
         (self.f, sd)
     }
 
@@ -364,7 +364,7 @@ impl<T: Real> FaultTracker<T> {
         for i in 0..6 {
             for p in [&mut self.p_ee, &mut self.p_ff] {
                 if let Some(v) = p.get_mut((i, i)) {
-                    *v = v.max(T::zero());
+                    *v = v.fmax(T::zero());
                 }
             }
         }
