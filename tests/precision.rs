@@ -15,10 +15,18 @@
     clippy::needless_range_loop
 )] // test code: a panic is a failed assertion
 
-use hal_sim::runner::{run, RunOptions, Trace};
+use hal_sim::runner::{monitor_config, run, run_with, RunOptions, Trace};
 use hal_sim::Scenario;
 use imu_fdi::math::wrap_pi_f64;
-use imu_fdi::monitor::Phase;
+use imu_fdi::math::Real;
+use imu_fdi::monitor::{Phase, UkfMonitorConfig};
+
+/// `run` with the tracking fault estimate on (`fault_psd`).
+fn run_tracking<T: Real>(scn: &Scenario, seed: u64) -> Trace {
+    let mut cfg = monitor_config::<T>(scn, &RunOptions::default());
+    cfg.fault_psd = Some(UkfMonitorConfig::fault_tracking_psd());
+    run_with::<T>(scn, seed, cfg).unwrap()
+}
 
 struct Agreement {
     worst_sigma: f64,
@@ -84,5 +92,28 @@ fn f32_agrees_with_f64_on_s2() {
         assert!(g.worst_sigma < 0.3);
         assert_eq!(g.flag_mismatches, 0);
         assert!(g.worst_fhat < 0.02);
+    }
+}
+
+/// The tracking fault estimate (a 12-state covariance in f32) against f64:
+/// S2 seeds 1–2 and 10 fault-free minutes.
+#[test]
+fn f32_tracking_fault_estimate_agrees_with_f64() {
+    for (scn, seeds) in [
+        (Scenario::s2(), &[1u64, 2][..]),
+        (Scenario::auv_fault_free(600.0), &[3u64][..]),
+    ] {
+        for &seed in seeds {
+            let g = compare(
+                &run_tracking::<f32>(&scn, seed),
+                &run_tracking::<f64>(&scn, seed),
+            );
+            println!(
+                "{} seed {seed}, tracking estimate: worst fault-estimate difference {:.4} of min fault",
+                scn.name, g.worst_fhat
+            );
+            assert_eq!(g.flag_mismatches, 0);
+            assert!(g.worst_fhat < 0.02);
+        }
     }
 }

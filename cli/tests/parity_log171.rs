@@ -126,27 +126,26 @@ fn injected_gyro_steps_are_isolated_at_the_measured_rates() {
     )
     .unwrap();
     let axis = |a: usize| move |c: &StepCase| c.injection.channel == 3 + a;
-    // 1 °/s, measured: z 150/174, y 124/174, x 8/174 (IMU0's x gyro reads
+    // 1 °/s, measured: z 167/174, y 135/174, x 5/174 (IMU0's x gyro reads
     // 12 °/s of aliased vibration per sample: with it, a step on IMU1 or
     // IMU2 x cannot be told from the opposite step on the other one within
-    // 10 s at the isolation margin); 8 cases with a false alarm — most of
-    // them alarms or isolations that the step's own blocks raise within
-    // 0.5 s after it ends, when the alarm's confirmation (three decisions
-    // above threshold) came only then. (Before the confirmation and the
-    // decision spread over the next block's samples, issue 17: 285 passed,
-    // 6 false-alarm cases.)
+    // 10 s at the isolation margin); 5 cases with a false alarm. (Before
+    // the covariances learned a block only after every window containing
+    // it was judged, and learning stopped at half the threshold: z 150,
+    // y 124, x 8, 8 false-alarm cases.)
     let (z, n) = passes(&cases, axis(2));
-    assert!(z >= 149 && n == 174, "{z}/{n}");
+    assert!(z >= 166 && n == 174, "{z}/{n}");
     let (y, _) = passes(&cases, axis(1));
-    assert!(y >= 123, "{y}");
+    assert!(y >= 134, "{y}");
     let fa = cases.iter().filter(|c| c.false_alarm).count();
-    assert!(fa <= 8, "{fa}");
-    // Every IMU is covered: z steps on each IMU isolated in ≥ 45 of 58 cases.
+    assert!(fa <= 5, "{fa}");
+    // Every IMU is covered: z steps on each IMU isolated in ≥ 52 of 58
+    // cases (measured 53, 56, 58).
     for imu in 0..3 {
         let (ok, _) = passes(&cases, |c| {
             c.injection.imu == imu && c.injection.channel == 5
         });
-        assert!(ok >= 45, "imu {imu}: {ok}");
+        assert!(ok >= 52, "imu {imu}: {ok}");
     }
     // Delays: every isolation within the 10 s, median a few seconds.
     let mut d: Vec<f64> = cases.iter().filter_map(|c| c.delay).collect();
@@ -168,24 +167,23 @@ fn injected_accelerometer_steps_are_isolated_at_the_measured_rates() {
         CRASH,
     )
     .unwrap();
-    // 0.3 m/s², measured: x 141/174, y 159/174, z 91/174 (the a_z
-    // vibration events above), 5 cases with a false alarm (most of them
-    // alarms the step's own blocks raise right after it ends; 4 before the
-    // alarm confirmation and the decisions' 9-sample latency of issue 17,
-    // 6 before the accelerometers lost the power-up offset test).
+    // 0.3 m/s², measured: x 156/174, y 162/174, z 96/174 (the a_z
+    // vibration events above), 4 cases with a false alarm. (Before the
+    // covariances' delayed learning and `learn_below` 0.95: x 141, y 159,
+    // z 91, 5 cases with a false alarm.)
     let axis = |a: usize| move |c: &StepCase| c.injection.channel == a;
     let (x, _) = passes(&cases, axis(0));
     let (y, _) = passes(&cases, axis(1));
     let (z, _) = passes(&cases, axis(2));
-    assert!(x >= 140 && y >= 155 && z >= 90, "{x} {y} {z}");
+    assert!(x >= 155 && y >= 161 && z >= 95, "{x} {y} {z}");
     let fa = cases.iter().filter(|c| c.false_alarm).count();
-    assert!(fa <= 5, "{fa}");
+    assert!(fa <= 4, "{fa}");
     for imu in 0..3 {
         let (ok, _) = passes(&cases, |c| {
             c.injection.imu == imu && c.injection.channel < 2
         });
-        // Measured 98, 101, 100.
-        assert!(ok >= 96, "imu {imu}: {ok}");
+        // Measured 104, 107, 107.
+        assert!(ok >= 103, "imu {imu}: {ok}");
     }
 }
 

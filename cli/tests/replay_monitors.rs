@@ -14,7 +14,7 @@ use std::process::Command;
 use hal_sim::ots::run_augmented;
 use hal_sim::runner::{monitor_config, RunOptions};
 use hal_sim::Scenario;
-use imu_fdi::monitor::OtsukfConfig;
+use imu_fdi::monitor::{OtsukfConfig, UkfMonitorConfig};
 use imu_fdi_cli::eval::replay::{replay, write_simulated, ReplayOptions};
 use imu_fdi_cli::eval::replay_monitor::MonitorKind;
 
@@ -53,8 +53,8 @@ fn replay_rmse_on(
         None,
         |_| {
             let mut c = monitor_config(s3, &RunOptions::default());
-            if !track {
-                c.fault_psd = None;
+            if track {
+                c.fault_psd = Some(UkfMonitorConfig::fault_tracking_psd());
             }
             c
         },

@@ -203,7 +203,10 @@ pub struct UkfMonitorConfig<T> {
     /// filter on the fault and on the state deviation it has caused, fed by
     /// every innovation, instead of the window mean mapped by `M⁺`
     /// (`None`, SPEC §6). Larger follows faster changes with more noise.
-    /// Detection uses the window means either way.
+    /// Detection uses the window means either way. Off in the presets: on
+    /// the Cortex-M4F it costs ≈ 20,000 instructions per aiding epoch
+    /// (docs/performance.md); [`Self::fault_tracking_psd`] is the
+    /// OTSUKF's value, on in `replay`'s flight profile.
     pub fault_psd: Option<ImuVec<T>>,
     /// An aiding channel silent for this long is "not monitored", s.
     pub aiding_timeout_s: T,
@@ -294,19 +297,25 @@ impl<T: Real> UkfMonitorConfig<T> {
             aiding_delay_s: T::zero(),
             estimate_aiding_delay: false,
             estimate_heading_offset: false,
-            // The OTSUKF's fault random walk (`OtsukfConfig::from_base`):
-            // the same fault model for both monitors' estimates.
-            fault_psd: Some(ImuVec::new(
-                T::lit(0.05),
-                T::lit(0.05),
-                T::lit(0.05),
-                T::lit((0.5 * deg) * (0.5 * deg)),
-                T::lit((0.5 * deg) * (0.5 * deg)),
-                T::lit((0.5 * deg) * (0.5 * deg)),
-            )),
+            fault_psd: None,
             aiding_timeout_s: T::lit(1.0),
             frozen_samples: 20,
         }
+    }
+
+    /// The OTSUKF's fault random walk (`OtsukfConfig::from_base`: 0.05
+    /// (m/s²)²/s, (0.5 °/s)²/s), for [`Self::fault_psd`]: the same fault
+    /// model for both monitors' estimates.
+    pub fn fault_tracking_psd() -> ImuVec<T> {
+        let g = core::f64::consts::PI / 180.0 * 0.5;
+        ImuVec::new(
+            T::lit(0.05),
+            T::lit(0.05),
+            T::lit(0.05),
+            T::lit(g * g),
+            T::lit(g * g),
+            T::lit(g * g),
+        )
     }
 
     /// Defaults for an aircraft with GNSS NED velocity (σ 0.05 m/s) and GNSS
@@ -444,6 +453,9 @@ impl<T: Real> UkfMonitorConfig<T> {
             if self.estimate_heading_offset {
                 return Err(ConfigError::NotCompiled("estimate_heading_offset"));
             }
+        }
+        if !cfg!(feature = "fault-tracking") && self.fault_psd.is_some() {
+            return Err(ConfigError::NotCompiled("fault_psd"));
         }
         Ok(())
     }

@@ -123,5 +123,7 @@ pub fn flight_config(
     // inflation on the flight's own healthy start (bounded: a fault up to
     // √25 = 5× the white-noise detectable size is still found).
     c.max_innovation_inflation = opts.max_inflation.unwrap_or(25.0);
+    // The tracking fault estimate (the window mean lags and is noisy).
+    c.fault_psd = Some(UkfMonitorConfig::fault_tracking_psd());
     c
 }

@@ -175,7 +175,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         if self.tracker.active {
             // This epoch's estimate is shown by the next step
             // (`track_epoch`); until then the last one.
-            self.tracker.mask = monitored;
+            self.tracker.set_mask(monitored);
             let (f, sd) = self.tracker.estimate();
             let masked = |v: &ImuVec<T>| {
                 let mut v = *v;

@@ -21,11 +21,16 @@
 //!
 //! The 12-state covariance is kept in 6×6 blocks `P_ee`, `P_ef`, `P_ff`.
 
+use crate::filter::ChannelDiag;
 use crate::math::Real;
+#[cfg(feature = "fault-tracking")]
 use crate::math::{all_finite, mirror_lower};
-use crate::model::{ImuVec, Mat6, StateVec, NX};
+#[cfg(feature = "fault-tracking")]
+use crate::model::StateVec;
+use crate::model::{ImuVec, Mat6, NX, NZ};
 
 /// Tracking fault estimator state (see the module notes).
+#[cfg(feature = "fault-tracking")]
 #[derive(Debug, Clone)]
 pub(super) struct FaultTracker<T> {
     /// Running (started at monitoring start, stopped at alignment).
@@ -62,9 +67,10 @@ pub(super) struct FaultTracker<T> {
     gate: T,
     /// The monitored channels when the epoch's report was composed: the
     /// report shows the estimate of those only.
-    pub mask: [bool; 6],
+    mask: [bool; 6],
 }
 
+#[cfg(feature = "fault-tracking")]
 impl<T: Real> FaultTracker<T> {
     /// An inactive tracker.
     pub fn new() -> Self {
@@ -97,6 +103,17 @@ impl<T: Real> FaultTracker<T> {
         self.pending
     }
 
+    /// Records the channels the epoch's report monitors (the estimate is
+    /// shown on those only).
+    pub fn set_mask(&mut self, monitored: [bool; 6]) {
+        self.mask = monitored;
+    }
+
+    /// The channels set by [`set_mask`](Self::set_mask).
+    pub fn mask(&self) -> [bool; 6] {
+        self.mask
+    }
+
     /// Stages an aiding epoch: `x_prior` is the sensitivity `X⁻` before the
     /// filter's update, `gate` the outlier gate (σ). The epoch's work (its
     /// propagation, the innovations, the filter's update: several 6×6
@@ -112,7 +129,7 @@ impl<T: Real> FaultTracker<T> {
 
     /// Stages channel `i`'s innovation `r` of variance `var` (see
     /// [`observe`](Self::observe)).
-    pub fn stage(&mut self, i: usize, r: T, var: T) {
+    fn stage(&mut self, i: usize, r: T, var: T) {
         if let (Some(u), Some(rv), Some(vv)) =
             (self.used.get_mut(i), self.r.get_mut(i), self.var.get_mut(i))
         {
@@ -205,6 +222,7 @@ impl<T: Real> FaultTracker<T> {
     /// stays `e₅`: only the velocity rows of columns 0–2 and all rows of
     /// columns 3–4 change (the same values as
     /// `VehicleModel::mul_state_jacobian`, which adds the zeros; issue 17).
+    #[inline(never)] // off `predict`'s frame and inlined code (issue 17)
     pub fn advance(&mut self, a: &Mat6<T>, dt: T) {
         let (w0, w1, w2) = (a[(2, 1)], a[(0, 2)], a[(1, 0)]);
         let p = &mut self.phi;
@@ -228,8 +246,23 @@ impl<T: Real> FaultTracker<T> {
         self.elapsed += dt;
     }
 
+    /// Stages every fused or gate-rejected innovation of the update
+    /// (channel `i`: variance `S_ii` × the learnt inflation, the time
+    /// correlation it measured on the window means, taken as extra
+    /// variance per sample); [`run_epoch`](Self::run_epoch) observes them
+    /// in channel order.
+    #[inline(never)] // off `update`'s frame and inlined code (issue 17)
+    pub fn observe_all(&mut self, diag: &[ChannelDiag<T>; NZ], inflation: &[T; NZ]) {
+        for ((i, d), c) in diag.iter().enumerate().zip(inflation.iter()) {
+            if d.available {
+                self.stage(i, d.innovation, d.variance * *c);
+            }
+        }
+    }
+
     /// Propagation to this aiding epoch: `x_prior` is the sensitivity `X⁻`
     /// now, `psd` the fault's random-walk spectral density.
+    #[inline(never)] // off `update`'s frame and inlined code (issue 17)
     pub fn propagate(&mut self, x_prior: &Mat6<T>, psd: &ImuVec<T>) {
         let phi = self.phi;
         // Γ = X⁻ − Φ X⁺.
@@ -343,6 +376,7 @@ impl<T: Real> FaultTracker<T> {
 
     /// The monitor's filter update `e⁺ = (I − K H) e⁻`, given `t = I − K H`,
     /// and `x_post` the sensitivity after it.
+    #[inline(never)] // own stack frame, one copy (issue 17)
     pub fn filter_update(&mut self, t: &Mat6<T>, x_post: &Mat6<T>) {
         let mut e = StateVec::zeros();
         mul_acc(e.as_mut_slice(), t, self.e.as_slice(), false, T::one());
@@ -388,6 +422,7 @@ impl<T: Real> FaultTracker<T> {
 /// kernel for all of the tracker's block products: fully unrolled, each
 /// 6×6 product is ≈ 1.3 KB of flash and the tracker's epoch was 12 KB; this
 /// is one copy, its column loop over a run-time count (issue 17).
+#[cfg(feature = "fault-tracking")]
 #[inline(never)]
 fn mul_acc<T: Real>(out: &mut [T], a: &Mat6<T>, b: &[T], bt: bool, s: T) {
     for (j, oc) in out.chunks_exact_mut(6).enumerate() {
@@ -402,6 +437,7 @@ fn mul_acc<T: Real>(out: &mut [T], a: &Mat6<T>, b: &[T], bt: bool, s: T) {
 }
 
 /// `P −= k uᵀ` (6×6, column-major).
+#[cfg(feature = "fault-tracking")]
 #[inline(never)]
 fn outer_sub<T: Real>(p: &mut [T], k: &StateVec<T>, u: &StateVec<T>) {
     for (pc, uj) in p.chunks_exact_mut(6).zip(u.iter()) {
@@ -411,7 +447,56 @@ fn outer_sub<T: Real>(p: &mut [T], k: &StateVec<T>, u: &StateVec<T>) {
     }
 }
 
-#[cfg(test)]
+/// Without the feature `fault-tracking`: an empty stand-in with the same
+/// calls, so the monitor carries no tracker state (≈ 1 KB in f32).
+#[cfg(not(feature = "fault-tracking"))]
+#[derive(Debug, Clone)]
+pub(super) struct FaultTracker<T> {
+    /// Never set: the tracker does not run.
+    pub active: bool,
+    _t: core::marker::PhantomData<T>,
+}
+
+#[cfg(not(feature = "fault-tracking"))]
+impl<T: Real> FaultTracker<T> {
+    /// An inactive tracker.
+    pub fn new() -> Self {
+        Self {
+            active: false,
+            _t: core::marker::PhantomData,
+        }
+    }
+    /// Never: no epoch is staged.
+    pub fn pending(&self) -> bool {
+        false
+    }
+    /// Does nothing.
+    pub fn begin_epoch(&mut self, _x_prior: &Mat6<T>, _gate: T) {}
+    /// Does nothing.
+    pub fn observe_all(&mut self, _diag: &[ChannelDiag<T>; NZ], _inflation: &[T; NZ]) {}
+    /// Does nothing.
+    pub fn end_epoch(&mut self, _gain: &Mat6<T>, _h: Option<&Mat6<T>>) {}
+    /// Does nothing.
+    pub fn run_epoch(&mut self, _psd: &ImuVec<T>, _x_post: &Mat6<T>) {}
+    /// Does nothing (the configuration is refused without the feature).
+    pub fn start(&mut self, _sigma0: &ImuVec<T>, _x: &Mat6<T>) {}
+    /// No estimate.
+    pub fn estimate(&self) -> (ImuVec<T>, ImuVec<T>) {
+        (ImuVec::zeros(), ImuVec::zeros())
+    }
+    /// Does nothing.
+    pub fn set_mask(&mut self, _monitored: [bool; 6]) {}
+    /// No channel.
+    pub fn mask(&self) -> [bool; 6] {
+        [false; 6]
+    }
+    /// Does nothing.
+    pub fn forget_states(&mut self, _reset: &[bool; NX]) {}
+    /// Does nothing.
+    pub fn advance(&mut self, _a: &Mat6<T>, _dt: T) {}
+}
+
+#[cfg(all(test, feature = "fault-tracking"))]
 mod tests {
     #![allow(clippy::unwrap_used, clippy::indexing_slicing)] // test code
     use super::*;
@@ -582,7 +667,7 @@ mod tests {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "fault-tracking"))]
 mod structure_tests {
     #![allow(clippy::unwrap_used, clippy::indexing_slicing)] // test code
     use super::*;

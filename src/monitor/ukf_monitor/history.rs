@@ -21,6 +21,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         cfg!(feature = "aiding-estimators") && self.cfg.estimate_aiding_delay
     }
 
+    /// The tracking fault estimate is configured and compiled in (feature
+    /// `fault-tracking`; see [`delay_on`](Self::delay_on)).
+    pub(super) fn tracking_on(&self) -> bool {
+        cfg!(feature = "fault-tracking") && self.cfg.fault_psd.is_some()
+    }
+
     /// The heading-offset estimate runs (see [`delay_on`](Self::delay_on)).
     pub(super) fn heading_on(&self) -> bool {
         cfg!(feature = "aiding-estimators") && self.cfg.estimate_heading_offset

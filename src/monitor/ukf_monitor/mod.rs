@@ -379,7 +379,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         };
         self.tracker.run_epoch(&psd, &self.sensitivity);
         let (f, sd) = self.tracker.estimate();
-        let mask = self.tracker.mask;
+        let mask = self.tracker.mask();
         for (((o, s), (fv, sv)), m) in self
             .report
             .fault_estimate
@@ -432,7 +432,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // every update, while it saves a 6×6 product per IMU period.
         // X ← X + (A X + B) dt: one scaling by dt instead of two.
         self.sensitivity += (VehicleModel::mul_state_jacobian(&a, &self.sensitivity) + b) * dt;
-        if self.tracker.active {
+        if self.tracking_on() && self.tracker.active {
             // The same first-order transition, for the fault's state
             // deviation between aiding epochs.
             self.tracker.advance(&a, dt);
@@ -530,7 +530,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let record = self.stats_holdoff <= T::zero();
         // The tracker's epoch is staged here and run by the next step
         // (`FaultTracker::begin_epoch`, issue 17).
-        let track = self.cfg.fault_psd.is_some() && self.tracker.active;
+        let track = self.tracking_on() && self.tracker.active;
         if track {
             self.tracker
                 .begin_epoch(&self.sensitivity, self.cfg.gate_sigma);
@@ -571,12 +571,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                     w.push(v);
                 }
             }
-            if track && record {
-                // Per sample, the time correlation the learnt inflation
-                // measured on the window means is taken as extra variance.
-                let c = self.inflation.get(i).copied().unwrap_or(T::one());
-                self.tracker.stage(i, d.innovation, d.variance * c);
-            }
+        }
+        if track && record {
+            self.tracker.observe_all(&out.diag, &self.inflation);
         }
         self.report.detail.diag = out.diag;
         // (I − K H) X = X − K (H X), with H X already at hand.

@@ -28,7 +28,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 self.freeze_inflation();
                 // The fault estimate starts from "no fault", as uncertain
                 // as the smallest fault to detect.
-                if self.cfg.fault_psd.is_some() {
+                if self.tracking_on() {
                     self.tracker.start(&self.cfg.min_fault, &self.sensitivity);
                 }
                 for w in self.windows.iter_mut() {

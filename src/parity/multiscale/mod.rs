@@ -95,7 +95,8 @@ pub struct MultiscaleDecision<T> {
     /// where it beats the runner-up by the widest margin (longer windows
     /// average a noisy third sensor down and tell two candidates apart).
     pub isolate: Option<(usize, T)>,
-    /// The calibration and covariances learned from this block.
+    /// The calibration learned from this block (the covariances learn from
+    /// the block leaving the 10-s ring at the same time, see `learn_below`).
     pub learning: bool,
     /// The alarm comes from the gross test (a fault far beyond any
     /// vibration excursion: raised at once, without confirmation).
@@ -140,6 +141,12 @@ pub struct Multiscale<T: Real, const N: usize, const W: usize> {
     /// variance_blocks)`).
     updates: u32,
     regressors: [Phi<T>; W],
+    /// Mahalanobis norms² of the stored blocks (block-covariance units,
+    /// before clipping) and the window means their decisions saw: the
+    /// covariances learn a block only once it leaves the ring, after every
+    /// window containing it has been judged quiet (see `learn_quiet`).
+    norms: [T; W],
+    decided_means: [[Option<SVector<T, N>>; SCALES]; W],
     head: usize,
     filled: usize,
     /// Blocks since a score was last at or above the learning fraction.
@@ -202,6 +209,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             raw: [SVector::zeros(); W],
             updates: 0,
             regressors: [Phi::zeros(); W],
+            norms: [T::zero(); W],
+            decided_means: [[None; SCALES]; W],
             head: 0,
             filled: 0,
             quiet_blocks: 0,

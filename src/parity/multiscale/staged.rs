@@ -211,6 +211,14 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                 };
                 self.push(&clipped, &raw_r, &phi, gain, level);
                 self.work.means = self.window_means();
+                let newest = (self.head + W - 1) % W.max(1);
+                let means = self.work.means;
+                if let Some(slot) = self.norms.get_mut(newest) {
+                    *slot = norm2;
+                }
+                if let Some(slot) = self.decided_means.get_mut(newest) {
+                    *slot = means.map(|m| m.map(|(rbar, _, _)| rbar));
+                }
                 self.work.norm2 = norm2;
                 self.work.clipped = clipped;
                 BlockStage::Scale(0)
@@ -377,9 +385,22 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         }
     }
 
-    /// Learn only from quiet blocks, and only once the longest window has
-    /// been quiet throughout (a fault's onset must not be learned before it
-    /// is visible).
+    /// Learning from quiet decisions (every score below `learn_below` of
+    /// its threshold for a whole longest window). The calibration learns
+    /// the newest block: it must track the slow relative drift, and its
+    /// 2-min memory takes in a fault's first blocks only slowly. The
+    /// covariances and the vibration law learn a block only when it leaves
+    /// the ring, after every window containing it (the longest is the
+    /// ring) has been judged. Learning them from the newest block took in
+    /// a fault's first blocks while its windows were still filling: on
+    /// log171 a 1 °/s gyro step 25 s into monitoring (when the covariances
+    /// still move by 1/100 per block) was learned into the window
+    /// covariances for the whole 10 s after onset and never reached half
+    /// the threshold. With the delay the gate no longer has to freeze a
+    /// fault before it is visible, only to exclude what came near an
+    /// alarm, so `learn_below` is near one (less censoring of the
+    /// covariances, and a calibration that keeps learning through the
+    /// first manoeuvres after training).
     fn learn_quiet(&mut self) {
         let w = self.work;
         if w.best_ratio < self.cfg.learn_below {
@@ -393,15 +414,37 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         }
         self.work.out.learning = true;
         self.learn_calibration(&w.p, &w.phi, true);
+        self.learn_oldest();
+    }
+
+    /// The covariances and the vibration law learn the oldest block of the
+    /// full ring when every decision since it entered was quiet.
+    fn learn_oldest(&mut self) {
+        if self.filled < W || (self.quiet_blocks as usize) < W {
+            return;
+        }
+        // After `push`, `head` is the oldest block's slot.
+        let i = self.head;
+        let (Some(r), Some(gain), Some(level), Some(norm2), Some(means)) = (
+            self.residuals.get(i).copied(),
+            self.gains.get(i).copied(),
+            self.levels.get(i).copied(),
+            self.norms.get(i).copied(),
+            self.decided_means.get(i).copied(),
+        ) else {
+            return;
+        };
         self.updates = self.updates.saturating_add(1);
         let wt = T::one() / T::lit(f64::from(self.updates)).min(self.cfg.variance_blocks);
-        let d = w.clipped * w.clipped.transpose();
+        let d = r * r.transpose();
         self.block_cov = pad(&(self.block_cov * (T::one() - wt) + d * wt), self.dim);
-        // The block's raw energy in block-covariance units.
+        // The block's raw energy in block-covariance units (`gain` is
+        // `1/√ŝ` of its standardisation).
         let dimf = T::lit(self.dim.max(1) as f64);
-        self.scale.learn(w.level, w.energy * w.norm2 / dimf, wt);
-        for (cov, m) in self.window_cov.iter_mut().zip(w.means.iter()) {
-            if let Some((rbar, _, _)) = m {
+        let energy = T::one() / (gain * gain).max(T::lit(1e-12));
+        self.scale.learn(level, energy * norm2 / dimf, wt);
+        for (cov, m) in self.window_cov.iter_mut().zip(means.iter()) {
+            if let Some(rbar) = m {
                 *cov = pad(
                     &(*cov * (T::one() - wt) + rbar * rbar.transpose() * wt),
                     self.dim,
