@@ -222,7 +222,10 @@ impl<T: Real> FaultTracker<T> {
     /// stays `e₅`: only the velocity rows of columns 0–2 and all rows of
     /// columns 3–4 change (the same values as
     /// `VehicleModel::mul_state_jacobian`, which adds the zeros; issue 17).
-    #[inline(never)] // off `predict`'s frame and inlined code (issue 17)
+    ///
+    /// Inlined into `predict`, unlike the epoch's methods: without the
+    /// feature the stand-in leaves nothing there, and with it a call per
+    /// IMU step cost S2 SIL step mean 8,245 against 8,145 inlined.
     pub fn advance(&mut self, a: &Mat6<T>, dt: T) {
         let (w0, w1, w2) = (a[(2, 1)], a[(0, 2)], a[(1, 0)]);
         let p = &mut self.phi;
