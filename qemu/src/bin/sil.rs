@@ -134,7 +134,12 @@ fn main() -> ! {
     let Some(scn) = cortex_m::singleton!(: Scenario = Scenario::s2()) else {
         finish(false)
     };
-    let cfg = monitor_config::<f32>(scn, &RunOptions::default());
+    #[allow(unused_mut)] // set only with the feature `fault-tracking`
+    let mut cfg = monitor_config::<f32>(scn, &RunOptions::default());
+    #[cfg(feature = "fault-tracking")]
+    {
+        cfg.fault_psd = Some(imu_fdi::monitor::UkfMonitorConfig::fault_tracking_psd());
+    }
     let Ok(m) = UkfMonitor::<f32>::new(cfg) else {
         hprintln!("invalid monitor configuration");
         finish(false)

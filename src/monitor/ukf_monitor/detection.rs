@@ -173,6 +173,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.report.detail.fault_estimate_window = est;
         self.report.fault_estimate = est;
         if self.tracker.active {
+            // This epoch's estimate is shown by the next step
+            // (`track_epoch`); until then the last one.
+            self.tracker.set_mask(monitored);
             let (f, sd) = self.tracker.estimate();
             let masked = |v: &ImuVec<T>| {
                 let mut v = *v;

@@ -292,6 +292,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             return &self.report;
         }
 
+        // --- the tracking fault estimate's staged aiding epoch ----------
+        if self.tracker.pending() {
+            self.track_epoch();
+        }
+
         // --- prediction ---------------------------------------------------
         let usable = in_range && !health.frozen;
         if !usable {
@@ -364,6 +369,30 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         &self.report
     }
 
+    /// Runs the tracker's aiding epoch staged by the last update (the
+    /// sensitivity is still that update's `X⁺`, `Φ` still the epoch's) and
+    /// shows its estimate on the channels that epoch's report monitored.
+    #[inline(never)] // own stack frame and one copy (issue 17)
+    fn track_epoch(&mut self) {
+        let Some(psd) = self.cfg.fault_psd else {
+            return;
+        };
+        self.tracker.run_epoch(&psd, &self.sensitivity);
+        let (f, sd) = self.tracker.estimate();
+        let mask = self.tracker.mask();
+        for (((o, s), (fv, sv)), m) in self
+            .report
+            .fault_estimate
+            .iter_mut()
+            .zip(self.report.detail.fault_sigma.iter_mut())
+            .zip(f.iter().zip(sd.iter()))
+            .zip(mask.iter())
+        {
+            *o = if *m { *fv } else { T::zero() };
+            *s = if *m { *sv } else { T::zero() };
+        }
+    }
+
     #[inline(never)] // own stack frame and one copy (issue 17)
     fn try_align(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>) {
         let Some(x) = align_state(&self.model, &self.meas, aiding, omega) else {
@@ -404,6 +433,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // X ← X + (A X + B) dt: one scaling by dt instead of two.
         self.sensitivity += (VehicleModel::mul_state_jacobian(&a, &self.sensitivity) + b) * dt;
         if self.tracking_on() && self.tracker.active {
+            // The same first-order transition, for the fault's state
+            // deviation between aiding epochs.
             self.tracker.advance(&a, dt);
         }
         self.last_input_at = Some((x, trig));
@@ -497,11 +528,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             h * self.sensitivity
         };
         let record = self.stats_holdoff <= T::zero();
+        // The tracker's epoch is staged here and run by the next step
+        // (`FaultTracker::begin_epoch`, issue 17).
         let track = self.tracking_on() && self.tracker.active;
         if track {
-            if let Some(psd) = self.cfg.fault_psd {
-                self.tracker.propagate(&self.sensitivity, &psd);
-            }
+            self.tracker
+                .begin_epoch(&self.sensitivity, self.cfg.gate_sigma);
         }
         let mut rejected = false;
         for (i, d) in out.diag.iter().enumerate() {
@@ -541,14 +573,14 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             }
         }
         if track && record {
-            self.tracker
-                .observe_all(&out.diag, &h, &self.inflation, self.cfg.gate_sigma);
+            self.tracker.observe_all(&out.diag, &self.inflation);
         }
         self.report.detail.diag = out.diag;
         // (I − K H) X = X − K (H X), with H X already at hand.
         self.sensitivity -= out.gain * hx;
         if track {
-            self.tracker.filter_update(&out.gain, &h, &self.sensitivity);
+            let h = if meas.is_affine() { None } else { Some(&h) };
+            self.tracker.end_epoch(&out.gain, h);
         }
         // The correction moved the current state: shift the history with it so
         // the next delayed measurement sees a consistent past.
