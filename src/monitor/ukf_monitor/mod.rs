@@ -5,12 +5,12 @@ use super::input::{
     aiding_in_range, check_period, in_range, lever_arm_rates, saturated, usable_aiding, Period,
 };
 use super::realign::NEVER_FUSED_S;
-use super::{ChannelState, ConfigError, Health, Phase, UkfMonitorConfig, UkfReport};
+use super::{ConfigError, Health, Phase, UkfMonitorConfig, UkfReport};
 use crate::detect::{
     paper_matrix, Detector, InnovationWindow, Persistence, Statistic, TTest,
     PAPER_MATRIX_AS_PRINTED, PAPER_MATRIX_CORRECTED,
 };
-use crate::filter::{ChannelDiag, Gate, Ukf, UkfError};
+use crate::filter::{Gate, Ukf, UkfError};
 use crate::math::{try_inverse, Real};
 use crate::model::{
     discrete_process_noise_structured, AttitudeTrig, ImuVec, Mat6, Measurement, MeasurementModel,
@@ -18,6 +18,7 @@ use crate::model::{
 };
 use crate::stats::normal_upper_quantile;
 
+mod compose;
 mod delay;
 mod detection;
 mod fault_track;
@@ -369,30 +370,6 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         &self.report
     }
 
-    /// Runs the tracker's aiding epoch staged by the last update (the
-    /// sensitivity is still that update's `X⁺`, `Φ` still the epoch's) and
-    /// shows its estimate on the channels that epoch's report monitored.
-    #[inline(never)] // own stack frame and one copy (issue 17)
-    fn track_epoch(&mut self) {
-        let Some(psd) = self.cfg.fault_psd else {
-            return;
-        };
-        self.tracker.run_epoch(&psd, &self.sensitivity);
-        let (f, sd) = self.tracker.estimate();
-        let mask = self.tracker.mask();
-        for (((o, s), (fv, sv)), m) in self
-            .report
-            .fault_estimate
-            .iter_mut()
-            .zip(self.report.detail.fault_sigma.iter_mut())
-            .zip(f.iter().zip(sd.iter()))
-            .zip(mask.iter())
-        {
-            *o = if *m { *fv } else { T::zero() };
-            *s = if *m { *sv } else { T::zero() };
-        }
-    }
-
     #[inline(never)] // own stack frame and one copy (issue 17)
     fn try_align(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>) {
         let Some(x) = align_state(&self.model, &self.meas, aiding, omega) else {
@@ -589,46 +566,5 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         self.last_h = h;
         Ok((rejected, out.covariance_reset.is_some()))
-    }
-
-    /// Writes this step's report into `self.report` in place (no copy of
-    /// the ≈ 340-byte report through a return value, issue 17).
-    #[inline(never)] // own stack frame and one copy (issue 17)
-    fn compose(&mut self, imu: &ImuVec<T>, health: Health, updated: bool) {
-        let r = &mut self.report;
-        // Only `update` writes the diagnostics, and only on a step that
-        // reports `updated`: after a step without one they are still the
-        // defaults this clears them to (a predict-only step skips the
-        // 120-byte store, issue 17).
-        let diag_stale = r.updated;
-        r.phase = self.phase;
-        if self.phase != Phase::Monitoring {
-            r.status = [ChannelState::NotMonitored; NZ];
-        }
-        r.health = health;
-        r.updated = updated;
-        r.state = *self.ukf.state();
-        r.state_sigma = self
-            .ukf
-            .covariance()
-            .diagonal()
-            .map(|v| v.fmax(T::zero()).sqrt_fast());
-        r.nominal_bias = self.nominal_bias;
-        let mut corrected = imu - self.nominal_bias;
-        for ((c, s), f) in corrected
-            .iter_mut()
-            .zip(r.status.iter())
-            .zip(r.fault_estimate.iter())
-        {
-            if matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative) {
-                *c -= *f;
-            }
-        }
-        r.corrected_imu = corrected;
-        r.detail.covariance_resets = self.ukf.covariance_resets();
-        r.detail.innovation_inflation = self.inflation;
-        if !updated && diag_stale {
-            r.detail.diag = [ChannelDiag::default(); NZ];
-        }
     }
 }
