@@ -126,19 +126,23 @@ fn injected_gyro_steps_are_isolated_at_the_measured_rates() {
     )
     .unwrap();
     let axis = |a: usize| move |c: &StepCase| c.injection.channel == 3 + a;
-    // 1 °/s, measured: z 167/174, y 135/174, x 5/174 (IMU0's x gyro reads
-    // 12 °/s of aliased vibration per sample: with it, a step on IMU1 or
-    // IMU2 x cannot be told from the opposite step on the other one within
-    // 10 s at the isolation margin); 5 cases with a false alarm. (Before
+    // 1 °/s, measured: z 167/174, y 136/174, x 33/174, 4 cases with a
+    // false alarm. IMU0's x gyro reads 12 °/s of aliased vibration per
+    // sample, so a step on IMU1 or IMU2 x is nearly the opposite step on
+    // the other one (whitened cosine −0.95): x steps are isolated only since
+    // the 5- and 10-s windows attribute alarms on their unclipped means
+    // (before: x 5, y 135, 5 false-alarm cases; IMU0 x still 0/58). (Before
     // the covariances learned a block only after every window containing
     // it was judged, and learning stopped at half the threshold: z 150,
     // y 124, x 8, 8 false-alarm cases.)
     let (z, n) = passes(&cases, axis(2));
     assert!(z >= 166 && n == 174, "{z}/{n}");
     let (y, _) = passes(&cases, axis(1));
-    assert!(y >= 134, "{y}");
+    assert!(y >= 135, "{y}");
+    let (x, _) = passes(&cases, axis(0));
+    assert!(x >= 32, "{x}");
     let fa = cases.iter().filter(|c| c.false_alarm).count();
-    assert!(fa <= 5, "{fa}");
+    assert!(fa <= 4, "{fa}");
     // Every IMU is covered: z steps on each IMU isolated in ≥ 52 of 58
     // cases (measured 53, 56, 58).
     for imu in 0..3 {
@@ -167,23 +171,24 @@ fn injected_accelerometer_steps_are_isolated_at_the_measured_rates() {
         CRASH,
     )
     .unwrap();
-    // 0.3 m/s², measured: x 156/174, y 162/174, z 96/174 (the a_z
-    // vibration events above), 4 cases with a false alarm. (Before the
-    // covariances' delayed learning and `learn_below` 0.95: x 141, y 159,
-    // z 91, 5 cases with a false alarm.)
+    // 0.3 m/s², measured: x 156/174, y 164/174, z 101/174 (the a_z
+    // vibration events above), 3 cases with a false alarm (before the
+    // unclipped attribution: y 162, z 96, 4). (Before the covariances'
+    // delayed learning and `learn_below` 0.95: x 141, y 159, z 91, 5 cases
+    // with a false alarm.)
     let axis = |a: usize| move |c: &StepCase| c.injection.channel == a;
     let (x, _) = passes(&cases, axis(0));
     let (y, _) = passes(&cases, axis(1));
     let (z, _) = passes(&cases, axis(2));
-    assert!(x >= 155 && y >= 161 && z >= 95, "{x} {y} {z}");
+    assert!(x >= 155 && y >= 163 && z >= 100, "{x} {y} {z}");
     let fa = cases.iter().filter(|c| c.false_alarm).count();
-    assert!(fa <= 4, "{fa}");
+    assert!(fa <= 3, "{fa}");
     for imu in 0..3 {
         let (ok, _) = passes(&cases, |c| {
             c.injection.imu == imu && c.injection.channel < 2
         });
-        // Measured 104, 107, 107.
-        assert!(ok >= 103, "imu {imu}: {ok}");
+        // Measured 105, 107, 108.
+        assert!(ok >= 104, "imu {imu}: {ok}");
     }
 }
 

@@ -401,6 +401,23 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         Some(s / T::lit(len as f64))
     }
 
+    /// Mean of the newest `len` residuals standardised (each by its own
+    /// block's gain) but not clipped; `None` until `len` blocks are stored.
+    fn unclipped_mean(&self, len: usize) -> Option<SVector<T, N>> {
+        if len == 0 || self.filled < len {
+            return None;
+        }
+        let mut s = SVector::<T, N>::zeros();
+        let mut idx = self.head;
+        for _ in 0..len {
+            idx = (idx + W - 1) % W.max(1);
+            if let (Some(r), Some(g)) = (self.raw.get(idx), self.gains.get(idx)) {
+                s += r * *g;
+            }
+        }
+        Some(s / T::lit(len as f64))
+    }
+
     /// Per-sensor relative bias the calibration has absorbed: the suspect
     /// with its GLR bias estimate, when it exceeds the offset limit (a fault
     /// present since power-up), and the runner-up margin. The offset is
