@@ -15,6 +15,7 @@ pub use decouple::{
     decouple_flags, paper_matrix, runtime_sign_matrix, PAPER_MATRIX_AS_PRINTED,
     PAPER_MATRIX_CORRECTED,
 };
+pub(crate) use estimator::estimate_as_written_identity;
 pub use estimator::{estimate_as_written, estimate_corrected};
 pub use glr::{glr_isolate, GlrResult};
 pub use persistence::Persistence;
