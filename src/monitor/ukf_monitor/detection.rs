@@ -116,11 +116,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         let flags = test_flags(&tstat, threshold);
         let scale = self.window_scale();
-        let mut m_eff = self.signature;
-        for (i, s) in scale.iter().enumerate() {
-            let row = m_eff.row(i) * *s;
-            m_eff.set_row(i, &row);
-        }
+        // Built scaled, not copied and then scaled row by row (issue 17).
+        let m_eff = self
+            .signature
+            .map_with_location(|i, _, v| v * scale.get(i).copied().unwrap_or_else(T::one));
         let rule = DecisionRule {
             detector: self.cfg.detector,
             paper_inv: self.paper_inv.as_ref(),

@@ -436,7 +436,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             self.learn_heading_offset(aiding, omega);
         }
         let x_prior = *self.ukf.state();
-        let h = self.meas.jacobian(&x_prior, omega);
+        // M1's Jacobian is the identity (`MeasurementModel::jacobian`).
+        let affine = self.meas.is_affine();
+        let h = if affine {
+            Mat6::identity()
+        } else {
+            self.meas.jacobian(&x_prior, omega)
+        };
         let r = self.cfg.meas_sigma.component_mul(&self.cfg.meas_sigma);
         let meas = self.meas;
         let corrected;
@@ -463,11 +469,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         };
         // Centred on the current state this is the ordinary update.
         let center = delayed.unwrap_or(x_prior);
-        let out = if meas.is_affine() {
+        let out = if affine {
             self.ukf
-                .update_affine(
+                .update_identity(
                     &meas.predict(&center, omega),
-                    &h,
                     &aiding.z,
                     &available,
                     &r,
@@ -498,12 +503,14 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 &mut self.gate,
             )?
         };
-        // M1's Jacobian is the identity: skip the product.
-        let hx = if meas.is_affine() {
-            self.sensitivity
+        // M1's Jacobian is the identity: skip the product, and the copy
+        // (`H X` is read in place).
+        let hx_m2 = if affine {
+            None
         } else {
-            h * self.sensitivity
+            Some(h * self.sensitivity)
         };
+        let hx = hx_m2.as_ref().unwrap_or(&self.sensitivity);
         let record = self.stats_holdoff <= T::zero();
         // The tracker's epoch is staged here and run by the next step
         // (`FaultTracker::begin_epoch`, issue 17).
@@ -554,9 +561,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         self.report.detail.diag = out.diag;
         // (I − K H) X = X − K (H X), with H X already at hand.
-        self.sensitivity -= out.gain * hx;
+        let correction = out.gain * hx;
+        self.sensitivity -= correction;
         if track {
-            let h = if meas.is_affine() { None } else { Some(&h) };
+            let h = if affine { None } else { Some(&h) };
             self.tracker.end_epoch(&out.gain, h);
         }
         // The correction moved the current state: shift the history with it so
@@ -564,7 +572,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         if self.keeps_history() {
             self.shift_history(&x_prior);
         }
-        self.last_h = h;
+        // M1's stays the identity it starts as: no 36-value store.
+        if !affine {
+            self.last_h = h;
+        }
         Ok((rejected, out.covariance_reset.is_some()))
     }
 }
