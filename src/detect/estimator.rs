@@ -155,10 +155,8 @@ pub fn estimate_corrected<T: Real>(
     columns: &[bool; 6],
 ) -> Option<ImuVec<T>> {
     // Normal equations Mᵀ W M f = Mᵀ W r̄, with W M formed once.
-    let mut wm = *m;
-    for (mut row, wi) in wm.row_iter_mut().zip(w.iter()) {
-        row *= *wi;
-    }
+    // Built scaled, not copied and then scaled row by row (issue 17).
+    let wm = m.map_with_location(|i, _, v| v * w.get(i).copied().unwrap_or_else(T::zero));
     // Mᵀ W M is symmetric and `cholesky` reads its lower triangle only.
     let mut normal = Mat6::<T>::zeros();
     for b in 0..6 {

@@ -7,8 +7,8 @@ use super::{ChannelDiag, Gate, SigmaParams, SigmaWeights};
 mod split;
 pub(crate) use crate::math::all_finite;
 use crate::math::{
-    add_outer_lower, cholesky, cholesky_solve_right, is_identity, mirror_lower, symmetrize,
-    wrap_pi, LinalgError, Real,
+    add_outer_lower, cholesky, cholesky_solve_right, is_identity, lower_finite, mirror_lower,
+    symmetrize, wrap_pi, LinalgError, Real,
 };
 
 /// Why a UKF step did not complete normally.
@@ -578,7 +578,9 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
             }
         }
         mirror_lower(&mut p);
-        if !(all_finite(x.as_slice()) && all_finite(p.as_slice())) {
+        // The mirror copied the lower triangle: testing it is testing `P`
+        // (21 values, not 36; issue 17).
+        if !(all_finite(x.as_slice()) && lower_finite(&p)) {
             return Err(UkfError::NonFinite);
         }
         self.x = x;

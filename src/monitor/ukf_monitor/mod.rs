@@ -469,17 +469,23 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         };
         // Centred on the current state this is the ordinary update.
         let center = delayed.unwrap_or(x_prior);
+        // The output is read where the update left it, not moved between
+        // the two forms' `Result`s (a 380-byte copy per update, issue 17).
+        let affine_out;
+        let split_out;
         let out = if affine {
-            self.ukf
-                .update_identity(
-                    &meas.predict(&center, omega),
-                    &aiding.z,
-                    &available,
-                    &r,
-                    &MEAS_ANGLES,
-                    &mut self.gate,
-                )
-                .map_err(UkfError::widen)?
+            affine_out = self.ukf.update_identity(
+                &meas.predict(&center, omega),
+                &aiding.z,
+                &available,
+                &r,
+                &MEAS_ANGLES,
+                &mut self.gate,
+            );
+            match &affine_out {
+                Ok(o) => o,
+                Err(e) => return Err(e.widen()),
+            }
         } else {
             // M2 is affine in the body velocity given the attitude: the split
             // update maps those sigma points through the Jacobian at the
@@ -490,7 +496,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             } else {
                 h
             };
-            self.ukf.update_split(
+            split_out = self.ukf.update_split(
                 &center,
                 &order,
                 nonlinear,
@@ -501,7 +507,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 &r,
                 &MEAS_ANGLES,
                 &mut self.gate,
-            )?
+            )?;
+            &split_out
         };
         // M1's Jacobian is the identity: skip the product, and the copy
         // (`H X` is read in place).
