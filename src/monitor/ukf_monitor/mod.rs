@@ -11,7 +11,7 @@ use crate::detect::{
     PAPER_MATRIX_AS_PRINTED, PAPER_MATRIX_CORRECTED,
 };
 use crate::filter::{Gate, Ukf, UkfError};
-use crate::math::{try_inverse, Real};
+use crate::math::{sub_product, try_inverse, Real};
 use crate::model::{
     discrete_process_noise_structured, AttitudeTrig, ImuVec, Mat6, Measurement, MeasurementModel,
     ModelError, StateVec, VehicleModel, NX, NZ, ROLL, STATE_ANGLES,
@@ -567,9 +567,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             self.tracker.observe_all(&out.diag, &self.inflation);
         }
         self.report.detail.diag = out.diag;
-        // (I − K H) X = X − K (H X), with H X already at hand.
-        let correction = out.gain * hx;
-        self.sensitivity -= correction;
+        // (I − K H) X = X − K (H X), with H X already at hand (M1: X).
+        sub_product(&mut self.sensitivity, &out.gain, hx_m2.as_ref());
         if track {
             let h = if affine { None } else { Some(&h) };
             self.tracker.end_epoch(&out.gain, h);
