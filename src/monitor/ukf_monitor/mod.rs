@@ -469,23 +469,18 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         };
         // Centred on the current state this is the ordinary update.
         let center = delayed.unwrap_or(x_prior);
-        // The output is read where the update left it, not moved between
-        // the two forms' `Result`s (a 380-byte copy per update, issue 17).
-        let affine_out;
-        let split_out;
-        let out = if affine {
-            affine_out = self.ukf.update_identity(
+        // Both forms with the same (infallible-model) error type: one
+        // `Result` slot, and the output read where the update left it, not
+        // moved into the caller's error type (a 380-byte copy, issue 17).
+        let res = if affine {
+            self.ukf.update_identity(
                 &meas.predict(&center, omega),
                 &aiding.z,
                 &available,
                 &r,
                 &MEAS_ANGLES,
                 &mut self.gate,
-            );
-            match &affine_out {
-                Ok(o) => o,
-                Err(e) => return Err(e.widen()),
-            }
+            )
         } else {
             // M2 is affine in the body velocity given the attitude: the split
             // update maps those sigma points through the Jacobian at the
@@ -496,19 +491,22 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             } else {
                 h
             };
-            split_out = self.ukf.update_split(
+            self.ukf.update_split(
                 &center,
                 &order,
                 nonlinear,
                 &aiding.z,
                 &available,
-                |s| Ok(meas.predict(s, omega)),
+                |s| Ok::<_, core::convert::Infallible>(meas.predict(s, omega)),
                 &h_center,
                 &r,
                 &MEAS_ANGLES,
                 &mut self.gate,
-            )?;
-            &split_out
+            )
+        };
+        let out = match &res {
+            Ok(o) => o,
+            Err(e) => return Err(e.widen()),
         };
         // M1's Jacobian is the identity: skip the product, and the copy
         // (`H X` is read in place).
