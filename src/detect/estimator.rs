@@ -26,6 +26,24 @@ pub fn estimate_as_written<T: Real>(
     solve_pivoted(hg, *rbar)
 }
 
+/// [`estimate_as_written`] for M2's `H = [R D; 0 I]` and the vehicle
+/// model's `B = [I S; 0 E]` (`VehicleModel::jacobian_input_with`): `H B` is
+/// block upper triangular, its lower-left 3×3 block exactly zero, so the
+/// pivoted elimination never moves a pivot across the two blocks nor
+/// eliminates below the first, and is done without those operations on
+/// known zeros (`solve_pivoted_blocks`). The result equals
+/// [`estimate_as_written`] (a zero's sign aside: unit test), and the
+/// general 6×6 elimination is not in the monitor's code (issue 17). The
+/// lower-left blocks of `h` and `b` are taken to be zero.
+pub(crate) fn estimate_as_written_blocks<T: Real>(
+    h: &Mat6<T>,
+    b: &Mat6<T>,
+    dt: T,
+    rbar: &ImuVec<T>,
+) -> Option<ImuVec<T>> {
+    solve_pivoted_blocks(h * b * (-dt), *rbar, 3)
+}
+
 /// [`estimate_as_written`] for `H = I` (M1) and an input Jacobian of the
 /// vehicle model's block form `B = [I S; 0 E]` (upper-left block the
 /// identity, lower-left zero: `VehicleModel::jacobian_input_with`). The
@@ -104,11 +122,27 @@ pub(crate) fn estimate_as_written_identity<T: Real>(
 /// on copies (a fixed 6×6 kernel: about 70 % of the instructions of nalgebra's
 /// generic LU on the Cortex-M4F). `None` when a pivot is zero or the result
 /// is not finite.
-fn solve_pivoted<T: Real>(mut a: Mat6<T>, mut b: ImuVec<T>) -> Option<ImuVec<T>> {
+fn solve_pivoted<T: Real>(a: Mat6<T>, b: ImuVec<T>) -> Option<ImuVec<T>> {
+    solve_pivoted_blocks(a, b, 6)
+}
+
+/// [`solve_pivoted`] for an `A` whose rows from `split` on are zero in the
+/// columns before `split` (block upper triangular; those entries are not
+/// read): the pivot of a column before `split` is searched, and rows are
+/// eliminated, only among the rows before `split` — the rows below would
+/// never win the search and are eliminated with a zero multiplier, so the
+/// values are those of [`solve_pivoted`] (a zero's sign aside). `split = 6`
+/// is the general elimination.
+fn solve_pivoted_blocks<T: Real>(
+    mut a: Mat6<T>,
+    mut b: ImuVec<T>,
+    split: usize,
+) -> Option<ImuVec<T>> {
     for k in 0..6 {
+        let end = if k < split { split.min(6) } else { 6 };
         let mut p = k;
         let mut best = a[(k, k)].abs();
-        for i in (k + 1)..6 {
+        for i in (k + 1)..end {
             let v = a[(i, k)].abs();
             if v > best {
                 best = v;
@@ -123,7 +157,7 @@ fn solve_pivoted<T: Real>(mut a: Mat6<T>, mut b: ImuVec<T>) -> Option<ImuVec<T>>
             b.swap_rows(p, k);
         }
         let inv = T::one() / a[(k, k)];
-        for i in (k + 1)..6 {
+        for i in (k + 1)..end {
             let f = a[(i, k)] * inv;
             for j in (k + 1)..6 {
                 let akj = a[(k, j)];
@@ -209,8 +243,9 @@ mod tests {
 
     #[test]
     fn block_form_solve_equals_the_pivoted_one() {
-        // B = [I S; 0 E] as the vehicle model builds it, over attitudes that
-        // make the lower-right block pivot either way, and degenerate cases.
+        // B = [I S; 0 E] as the vehicle model builds it and H = I or M2's
+        // [R D; 0 I], over attitudes that make either block pivot, and
+        // degenerate cases.
         let mut seed = 0x2545_f491_4f6c_dd1du64;
         let mut next = || {
             seed ^= seed << 13;
@@ -233,6 +268,12 @@ mod tests {
                 0.0, 0.0, 0.0, 0.0, sp / ct, cp / ct,
             )
             .cast::<f32>();
+            let rot = nalgebra::Rotation3::from_euler_angles(phi, theta, next() * 3.1);
+            let mut h2 = Mat6::<f64>::identity();
+            h2.fixed_view_mut::<3, 3>(0, 0).copy_from(rot.matrix());
+            h2.fixed_view_mut::<3, 3>(0, 3)
+                .copy_from(&nalgebra::Matrix3::from_fn(|_, _| next() * 10.0));
+            let h2 = h2.cast::<f32>();
             let r = ImuVec::<f64>::from_fn(|_, _| next() * 1e-2).cast::<f32>();
             let dt = if case == 7 { 0.0 } else { 0.01f32 };
             let r = if case == 9 {
@@ -242,8 +283,10 @@ mod tests {
             };
             let x = estimate_as_written_identity(&b, dt, &r);
             assert_eq!(x, estimate_as_written(&id, &b, dt, &r), "case {case}");
+            let x2 = estimate_as_written_blocks(&h2, &b, dt, &r);
+            assert_eq!(x2, estimate_as_written(&h2, &b, dt, &r), "M2 case {case}");
             if case != 7 && case != 9 {
-                assert!(x.is_some());
+                assert!(x.is_some() && x2.is_some());
             }
         }
         // The identity input Jacobian (before the first predict).

@@ -15,8 +15,8 @@ pub use decouple::{
     decouple_flags, paper_matrix, runtime_sign_matrix, PAPER_MATRIX_AS_PRINTED,
     PAPER_MATRIX_CORRECTED,
 };
-pub(crate) use estimator::estimate_as_written_identity;
 pub use estimator::{estimate_as_written, estimate_corrected};
+pub(crate) use estimator::{estimate_as_written_blocks, estimate_as_written_identity};
 pub use glr::{glr_isolate, GlrResult};
 pub use persistence::Persistence;
 pub use ttest::{t_statistic, TTest};

@@ -4,7 +4,7 @@
 
 use super::{UkfMonitor, MAX_NOMINAL_BIAS_FACTOR};
 use crate::detect::{
-    estimate_as_written, estimate_as_written_identity, estimate_corrected, test_flags,
+    estimate_as_written_blocks, estimate_as_written_identity, estimate_corrected, test_flags,
     window_evidence, DecisionRule, Statistic, WindowEvidence,
 };
 use crate::math::Real;
@@ -142,13 +142,15 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let est =
             estimate_corrected(&m_eff, &weight, &rbar, &monitored).unwrap_or_else(ImuVec::zeros);
         let raw_mean = rbar.component_div(&scale.map(|s| if s > T::zero() { s } else { T::one() }));
-        // M1's H is the identity and B the model's block form: the
-        // elimination without its known zeros (the same values, issue 17).
+        // H B is block upper triangular (M1's H the identity, M2's and B of
+        // the model's block form): the elimination without its operations
+        // on the zero blocks, and for M1 on the identity (the same values,
+        // issue 17).
         let b = self.last_input_b();
         let as_written = if self.meas.is_affine() {
             estimate_as_written_identity(&b, self.last_dt, &raw_mean)
         } else {
-            estimate_as_written(&self.last_h, &b, self.last_dt, &raw_mean)
+            estimate_as_written_blocks(&self.last_h, &b, self.last_dt, &raw_mean)
         };
         let mut as_written = as_written.unwrap_or_else(ImuVec::zeros);
         for (v, m) in as_written.iter_mut().zip(monitored.iter()) {
