@@ -41,7 +41,7 @@ pub(crate) fn estimate_as_written_blocks<T: Real>(
     dt: T,
     rbar: &ImuVec<T>,
 ) -> Option<ImuVec<T>> {
-    solve_pivoted_blocks(h * b * (-dt), *rbar, 3)
+    solve_pivoted_blocks::<T, 3>(h * b * (-dt), *rbar)
 }
 
 /// [`estimate_as_written`] for `H = I` (M1) and an input Jacobian of the
@@ -123,23 +123,22 @@ pub(crate) fn estimate_as_written_identity<T: Real>(
 /// generic LU on the Cortex-M4F). `None` when a pivot is zero or the result
 /// is not finite.
 fn solve_pivoted<T: Real>(a: Mat6<T>, b: ImuVec<T>) -> Option<ImuVec<T>> {
-    solve_pivoted_blocks(a, b, 6)
+    solve_pivoted_blocks::<T, 6>(a, b)
 }
 
-/// [`solve_pivoted`] for an `A` whose rows from `split` on are zero in the
-/// columns before `split` (block upper triangular; those entries are not
-/// read): the pivot of a column before `split` is searched, and rows are
-/// eliminated, only among the rows before `split` — the rows below would
+/// [`solve_pivoted`] for an `A` whose rows from `SPLIT` on are zero in the
+/// columns before `SPLIT` (block upper triangular; those entries are not
+/// read): the pivot of a column before `SPLIT` is searched, and rows are
+/// eliminated, only among the rows before `SPLIT` — the rows below would
 /// never win the search and are eliminated with a zero multiplier, so the
-/// values are those of [`solve_pivoted`] (a zero's sign aside). `split = 6`
+/// values are those of [`solve_pivoted`] (a zero's sign aside). `SPLIT = 6`
 /// is the general elimination.
-fn solve_pivoted_blocks<T: Real>(
+fn solve_pivoted_blocks<T: Real, const SPLIT: usize>(
     mut a: Mat6<T>,
     mut b: ImuVec<T>,
-    split: usize,
 ) -> Option<ImuVec<T>> {
     for k in 0..6 {
-        let end = if k < split { split.min(6) } else { 6 };
+        let end = if k < SPLIT { SPLIT.min(6) } else { 6 };
         let mut p = k;
         let mut best = a[(k, k)].abs();
         for i in (k + 1)..end {
