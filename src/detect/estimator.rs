@@ -191,12 +191,14 @@ pub fn estimate_corrected<T: Real>(
     // Built scaled, not copied and then scaled row by row (issue 17).
     let wm = m.map_with_location(|i, _, v| v * w.get(i).copied().unwrap_or_else(T::zero));
     // Mᵀ W M is symmetric and `cholesky` reads its lower triangle only.
-    let mut normal = Mat6::<T>::zeros();
-    for b in 0..6 {
-        for a in b..6 {
-            normal[(a, b)] = m.column(a).dot(&wm.column(b));
+    // Built in one pass, not zeroed first (issue 17).
+    let mut normal = Mat6::<T>::from_fn(|a, b| {
+        if a >= b {
+            m.column(a).dot(&wm.column(b))
+        } else {
+            T::zero()
         }
-    }
+    });
     let mut rhs = rbar.tr_mul(&wm);
     let mut observed = [false; 6];
     // A column no monitored channel sees has a zero diagonal: decouple it.
