@@ -16,6 +16,7 @@ pub use decouple::{
     PAPER_MATRIX_CORRECTED,
 };
 pub use estimator::{estimate_as_written, estimate_corrected};
+pub(crate) use estimator::{estimate_as_written_blocks, estimate_as_written_identity};
 pub use glr::{glr_isolate, GlrResult};
 pub use persistence::Persistence;
 pub use ttest::{t_statistic, TTest};

@@ -185,6 +185,32 @@ pub fn symmetrize<T: Real, const N: usize>(a: &mut SMatrix<T, N, N>) {
     }
 }
 
+/// `x −= g · y`, or `x −= g · x` when `y` is `None`, column by column in
+/// place: the values of `x -= g * y` (nalgebra's product sums `g_ik y_kj`
+/// over `k` in the same order; unit test) without the product's temporary
+/// and its copy (issue 17: the sensitivity's `(I − K H) X` at each update).
+pub(crate) fn sub_product<T: Real, const N: usize>(
+    x: &mut SMatrix<T, N, N>,
+    g: &SMatrix<T, N, N>,
+    y: Option<&SMatrix<T, N, N>>,
+) {
+    for j in 0..N {
+        // Column j of the product reads column j of `y` only: with `y = x`
+        // it is read before being overwritten.
+        let col: [T; N] = core::array::from_fn(|k| match y {
+            Some(y) => y[(k, j)],
+            None => x[(k, j)],
+        });
+        for i in 0..N {
+            let mut s = g[(i, 0)] * col[0];
+            for k in 1..N {
+                s += g[(i, k)] * col[k];
+            }
+            x[(i, j)] -= s;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -270,5 +296,19 @@ mod tests {
         assert_eq!(cholesky(&a), Err(LinalgError::NotPositiveDefinite(1)));
         let n = Matrix3::from_diagonal_element(f64::NAN);
         assert_eq!(cholesky(&n), Err(LinalgError::NotPositiveDefinite(0)));
+    }
+
+    #[test]
+    fn sub_product_matches_nalgebra() {
+        let g = SMatrix::<f32, 6, 6>::from_fn(|i, j| ((i * 7 + j * 3) % 11) as f32 * 0.37 - 1.9);
+        let y =
+            SMatrix::<f32, 6, 6>::from_fn(|i, j| ((i * 5 + j * 13) % 7) as f32 * 1.3e-3 - 0.004);
+        let x0 = SMatrix::<f32, 6, 6>::from_fn(|i, j| ((i + 2 * j) % 5) as f32 * 0.11 + 0.01);
+        let mut x = x0;
+        sub_product(&mut x, &g, Some(&y));
+        assert_eq!(x, x0 - g * y);
+        let mut x = y;
+        sub_product(&mut x, &g, None);
+        assert_eq!(x, y - g * y);
     }
 }

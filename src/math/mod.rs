@@ -16,7 +16,7 @@ pub use cholesky::{
     add_outer_lower, cholesky, cholesky_reference, cholesky_solve_right, mirror_lower, symmetrize,
     LinalgError,
 };
-pub(crate) use cholesky::{lower_finite, mirror_lower_into};
+pub(crate) use cholesky::{lower_finite, mirror_lower_into, sub_product};
 pub use identity::is_identity;
 pub use inverse::try_inverse;
 pub use jacobi::symmetric_eigen;

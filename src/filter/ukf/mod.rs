@@ -7,8 +7,8 @@ use super::{ChannelDiag, Gate, SigmaParams, SigmaWeights};
 mod split;
 pub(crate) use crate::math::all_finite;
 use crate::math::{
-    add_outer_lower, cholesky, cholesky_solve_right, is_identity, mirror_lower, symmetrize,
-    wrap_pi, LinalgError, Real,
+    add_outer_lower, cholesky, cholesky_solve_right, is_identity, lower_finite, mirror_lower,
+    symmetrize, wrap_pi, LinalgError, Real,
 };
 
 /// Why a UKF step did not complete normally.
@@ -434,25 +434,52 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
         gate: &mut Gate<T, M>,
     ) -> Result<UpdateOutput<T, N, M>, UkfError<core::convert::Infallible>> {
         // H = I (M1) needs no products: P_xz = P, P_zz = P + R.
-        let (pxz, mut pzz) = if M == N && is_identity(h) {
-            let pxz = SMatrix::<T, N, M>::from_fn(|i, j| {
-                self.p.get((i, j)).copied().unwrap_or_else(T::zero)
-            });
-            // P's lower triangle mirrored: `P` is symmetric to the bit (built
-            // mirrored), so this is `P` itself and needs no symmetrising.
-            let pzz = SMatrix::<T, M, M>::from_fn(|i, j| {
-                let (a, b) = if i >= j { (i, j) } else { (j, i) };
-                self.p.get((a, b)).copied().unwrap_or_else(T::zero)
-            });
-            (pxz, pzz)
-        } else {
-            let pxz = self.p * h.transpose();
-            // `H P Hᵀ` is symmetric only to rounding. (Adding R below
-            // changes the diagonal alone, so the order does not matter.)
-            let mut pzz = h * pxz;
-            symmetrize(&mut pzz);
-            (pxz, pzz)
-        };
+        if M == N && is_identity(h) {
+            return self.update_identity(z_center, z, available, r, meas_angles, gate);
+        }
+        let pxz = self.p * h.transpose();
+        // `H P Hᵀ` is symmetric only to rounding. (Adding R below
+        // changes the diagonal alone, so the order does not matter.)
+        let mut pzz = h * pxz;
+        symmetrize(&mut pzz);
+        for (i, ri) in r.iter().enumerate() {
+            if let Some(d) = pzz.get_mut((i, i)) {
+                *d += *ri;
+            }
+        }
+        self.correct(
+            z,
+            z_center,
+            pzz,
+            pxz,
+            available,
+            meas_angles,
+            gate,
+            None,
+            None,
+        )
+    }
+
+    /// [`update_affine`](Self::update_affine) with `H = I` (`M = N`), for a
+    /// caller that knows its Jacobian is the identity (M1): the same update
+    /// without the 36-entry identity test (issue 17).
+    pub(crate) fn update_identity<const M: usize>(
+        &mut self,
+        z_center: &SVector<T, M>,
+        z: &SVector<T, M>,
+        available: &[bool; M],
+        r: &SVector<T, M>,
+        meas_angles: &[bool; M],
+        gate: &mut Gate<T, M>,
+    ) -> Result<UpdateOutput<T, N, M>, UkfError<core::convert::Infallible>> {
+        let pxz =
+            SMatrix::<T, N, M>::from_fn(|i, j| self.p.get((i, j)).copied().unwrap_or_else(T::zero));
+        // P's lower triangle mirrored: `P` is symmetric to the bit (built
+        // mirrored), so this is `P` itself and needs no symmetrising.
+        let mut pzz = SMatrix::<T, M, M>::from_fn(|i, j| {
+            let (a, b) = if i >= j { (i, j) } else { (j, i) };
+            self.p.get((a, b)).copied().unwrap_or_else(T::zero)
+        });
         for (i, ri) in r.iter().enumerate() {
             if let Some(d) = pzz.get_mut((i, i)) {
                 *d += *ri;
@@ -551,7 +578,9 @@ impl<T: Real, const N: usize, const S: usize> Ukf<T, N, S> {
             }
         }
         mirror_lower(&mut p);
-        if !(all_finite(x.as_slice()) && all_finite(p.as_slice())) {
+        // The mirror copied the lower triangle: testing it is testing `P`
+        // (21 values, not 36; issue 17).
+        if !(all_finite(x.as_slice()) && lower_finite(&p)) {
             return Err(UkfError::NonFinite);
         }
         self.x = x;

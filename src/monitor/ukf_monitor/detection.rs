@@ -4,8 +4,8 @@
 
 use super::{UkfMonitor, MAX_NOMINAL_BIAS_FACTOR};
 use crate::detect::{
-    estimate_as_written, estimate_corrected, test_flags, window_evidence, DecisionRule, Statistic,
-    WindowEvidence,
+    estimate_as_written_blocks, estimate_as_written_identity, estimate_corrected, test_flags,
+    window_evidence, DecisionRule, Statistic, WindowEvidence,
 };
 use crate::math::Real;
 use crate::model::{ImuVec, NZ};
@@ -116,11 +116,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         let flags = test_flags(&tstat, threshold);
         let scale = self.window_scale();
-        let mut m_eff = self.signature;
-        for (i, s) in scale.iter().enumerate() {
-            let row = m_eff.row(i) * *s;
-            m_eff.set_row(i, &row);
-        }
+        // Built scaled, not copied and then scaled row by row (issue 17).
+        let m_eff = self
+            .signature
+            .map_with_location(|i, _, v| v * scale.get(i).copied().unwrap_or_else(T::one));
         let rule = DecisionRule {
             detector: self.cfg.detector,
             paper_inv: self.paper_inv.as_ref(),
@@ -143,9 +142,17 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let est =
             estimate_corrected(&m_eff, &weight, &rbar, &monitored).unwrap_or_else(ImuVec::zeros);
         let raw_mean = rbar.component_div(&scale.map(|s| if s > T::zero() { s } else { T::one() }));
-        let mut as_written =
-            estimate_as_written(&self.last_h, &self.last_input_b(), self.last_dt, &raw_mean)
-                .unwrap_or_else(ImuVec::zeros);
+        // H B is block upper triangular (M1's H the identity, M2's and B of
+        // the model's block form): the elimination without its operations
+        // on the zero blocks, and for M1 on the identity (the same values,
+        // issue 17).
+        let b = self.last_input_b();
+        let as_written = if self.meas.is_affine() {
+            estimate_as_written_identity(&b, self.last_dt, &raw_mean)
+        } else {
+            estimate_as_written_blocks(&self.last_h, &b, self.last_dt, &raw_mean)
+        };
+        let mut as_written = as_written.unwrap_or_else(ImuVec::zeros);
         for (v, m) in as_written.iter_mut().zip(monitored.iter()) {
             if !*m {
                 *v = T::zero();

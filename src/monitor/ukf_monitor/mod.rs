@@ -11,7 +11,7 @@ use crate::detect::{
     PAPER_MATRIX_AS_PRINTED, PAPER_MATRIX_CORRECTED,
 };
 use crate::filter::{Gate, Ukf, UkfError};
-use crate::math::{try_inverse, Real};
+use crate::math::{sub_product, try_inverse, Real};
 use crate::model::{
     discrete_process_noise_structured, AttitudeTrig, ImuVec, Mat6, Measurement, MeasurementModel,
     ModelError, StateVec, VehicleModel, NX, NZ, ROLL, STATE_ANGLES,
@@ -436,7 +436,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             self.learn_heading_offset(aiding, omega);
         }
         let x_prior = *self.ukf.state();
-        let h = self.meas.jacobian(&x_prior, omega);
+        // M1's Jacobian is the identity (`MeasurementModel::jacobian`).
+        let affine = self.meas.is_affine();
+        let h = if affine {
+            Mat6::identity()
+        } else {
+            self.meas.jacobian(&x_prior, omega)
+        };
         let r = self.cfg.meas_sigma.component_mul(&self.cfg.meas_sigma);
         let meas = self.meas;
         let corrected;
@@ -463,18 +469,18 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         };
         // Centred on the current state this is the ordinary update.
         let center = delayed.unwrap_or(x_prior);
-        let out = if meas.is_affine() {
-            self.ukf
-                .update_affine(
-                    &meas.predict(&center, omega),
-                    &h,
-                    &aiding.z,
-                    &available,
-                    &r,
-                    &MEAS_ANGLES,
-                    &mut self.gate,
-                )
-                .map_err(UkfError::widen)?
+        // Both forms with the same (infallible-model) error type: one
+        // `Result` slot, and the output read where the update left it, not
+        // moved into the caller's error type (a 380-byte copy, issue 17).
+        let res = if affine {
+            self.ukf.update_identity(
+                &meas.predict(&center, omega),
+                &aiding.z,
+                &available,
+                &r,
+                &MEAS_ANGLES,
+                &mut self.gate,
+            )
         } else {
             // M2 is affine in the body velocity given the attitude: the split
             // update maps those sigma points through the Jacobian at the
@@ -491,19 +497,25 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 nonlinear,
                 &aiding.z,
                 &available,
-                |s| Ok(meas.predict(s, omega)),
+                |s| Ok::<_, core::convert::Infallible>(meas.predict(s, omega)),
                 &h_center,
                 &r,
                 &MEAS_ANGLES,
                 &mut self.gate,
-            )?
+            )
         };
-        // M1's Jacobian is the identity: skip the product.
-        let hx = if meas.is_affine() {
-            self.sensitivity
+        let out = match &res {
+            Ok(o) => o,
+            Err(e) => return Err(e.widen()),
+        };
+        // M1's Jacobian is the identity: skip the product, and the copy
+        // (`H X` is read in place).
+        let hx_m2 = if affine {
+            None
         } else {
-            h * self.sensitivity
+            Some(h * self.sensitivity)
         };
+        let hx = hx_m2.as_ref().unwrap_or(&self.sensitivity);
         let record = self.stats_holdoff <= T::zero();
         // The tracker's epoch is staged here and run by the next step
         // (`FaultTracker::begin_epoch`, issue 17).
@@ -553,10 +565,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             self.tracker.observe_all(&out.diag, &self.inflation);
         }
         self.report.detail.diag = out.diag;
-        // (I − K H) X = X − K (H X), with H X already at hand.
-        self.sensitivity -= out.gain * hx;
+        // (I − K H) X = X − K (H X), with H X already at hand (M1: X).
+        sub_product(&mut self.sensitivity, &out.gain, hx_m2.as_ref());
         if track {
-            let h = if meas.is_affine() { None } else { Some(&h) };
+            let h = if affine { None } else { Some(&h) };
             self.tracker.end_epoch(&out.gain, h);
         }
         // The correction moved the current state: shift the history with it so
@@ -564,7 +576,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         if self.keeps_history() {
             self.shift_history(&x_prior);
         }
-        self.last_h = h;
+        // M1's stays the identity it starts as: no 36-value store.
+        if !affine {
+            self.last_h = h;
+        }
         Ok((rejected, out.covariance_reset.is_some()))
     }
 }
