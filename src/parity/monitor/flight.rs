@@ -123,17 +123,25 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// with isolation after `isolate_after` agreeing decisions whose
     /// hypothesis beats the runner-up by the margin. True when it isolated
     /// a sensor (the set changed).
+    ///
+    /// The test for "no block in work" is inlined into the callers (most
+    /// samples have none; the call and the body's set-up cost ≈ 44
+    /// instructions per sample on the M4F, issue 14).
+    #[inline]
     pub(super) fn multiscale_advance(&mut self, to_end: bool) -> bool {
-        if !self.configured() {
+        if !self.configured() || self.ms.as_ref().is_none_or(|ms| ms.pending().is_none()) {
             return false;
         }
+        self.run_multiscale_stage(to_end)
+    }
+
+    /// [`multiscale_advance`](Self::multiscale_advance) with a block in work.
+    #[inline(never)]
+    fn run_multiscale_stage(&mut self, to_end: bool) -> bool {
         let cfg = self.cfg.multiscale;
         let Some(ms) = self.ms.as_mut() else {
             return false;
         };
-        if ms.pending().is_none() {
-            return false;
-        }
         let (v, active) = (self.space.v(), self.space.active());
         let outcome = if to_end {
             ms.finish(v, active)

@@ -311,9 +311,11 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             let (value, s) = health.check_unlatched(*reading, &self.cfg.health);
             // Healthy, or failed before and already out of the set.
             quiet &= s == SensorStatus::Healthy || (*removed && health.failure().is_some());
-            if let (Some(x), Some(slot), Some(u)) = (value, m.get_mut(k), usable.get_mut(k)) {
-                *slot = x;
-                *u = true;
+            // Every slot written (0 when unusable, as initialised): the
+            // zero fill above is then dead and not done.
+            if let (Some(slot), Some(u)) = (m.get_mut(k), usable.get_mut(k)) {
+                *slot = value.unwrap_or(T::zero());
+                *u = value.is_some();
             }
             if let Some(st) = status.get_mut(k) {
                 *st = s;
