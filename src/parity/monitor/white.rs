@@ -10,7 +10,7 @@ use super::super::config::ParityDetector;
 use super::super::training::{Baseline, Trainer};
 use super::build::Newton;
 use super::reconfig::Reconfig;
-use super::{DetectorFlags, ParityMonitor, ParityPhase, ParityReport};
+use super::{DetectorFlags, ParityMonitor, ParityPhase};
 
 /// Blocks a CUSUM alarm takes at most to clear once the bias is gone
 /// (5 s with the default 0.1-s blocks).
@@ -65,16 +65,10 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// waits one more step (at most one stage or one held decision per
     /// step, not both).
     #[inline(never)] // the white-noise path only: kept out of `step`
-    pub(super) fn monitor(
-        &mut self,
-        p: &SVector<T, N>,
-        x: &Vector3<T>,
-        report: &mut ParityReport<T, N>,
-        staged: bool,
-    ) {
+    pub(super) fn monitor(&mut self, p: &SVector<T, N>, x: &Vector3<T>, staged: bool) {
         if !staged && self.configured() {
             if let Some(b) = self.held.take() {
-                self.decide(&b, report);
+                self.decide(&b);
             }
         }
         let Some(t) = self.tests.as_ref() else {
@@ -101,18 +95,18 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             self.advance_reconfig(true);
         }
         if let Some(h) = self.held.take() {
-            self.decide(&h, report);
+            self.decide(&h);
             if !self.configured() {
                 // That decision reconfigured: `b` belongs to the old space.
                 return;
             }
         }
-        self.decide(&b, report);
+        self.decide(&b);
     }
 
     /// The decision on block mean `b` (the window, χ², PCA and CUSUM
     /// tests; calibration; isolation).
-    fn decide(&mut self, b: &SVector<T, N>, report: &mut ParityReport<T, N>) {
+    fn decide(&mut self, b: &SVector<T, N>) {
         let Some(t) = self.tests else {
             return;
         };
@@ -123,7 +117,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let k_win = self.cfg.window_blocks;
         self.head = (self.head + 1) % k_win;
         self.filled = (self.filled + 1).min(k_win);
-        report.decision = true;
+        self.last.decision = true;
 
         // CUSUMs: per sensor direction, on the standardised block projection.
         let mut cusum_ratio = T::zero();
@@ -161,8 +155,8 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                 cusum_arg = Some(k);
             }
         }
-        report.cusum_ratio = cusum_ratio;
-        report.flags.cusum = cusum_ratio > T::one();
+        self.last.cusum_ratio = cusum_ratio;
+        self.last.flags.cusum = cusum_ratio > T::one();
 
         // Window tests once the window is full.
         let mut mean = SVector::<T, N>::zeros();
@@ -172,57 +166,57 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             }
             mean /= T::lit(k_win as f64);
             let kf = T::lit(k_win as f64);
-            report.glt = kf * mean.dot(&(t.cov_inv * mean));
-            report.flags.glt = report.glt > t.glt_threshold;
+            self.last.glt = kf * mean.dot(&(t.cov_inv * mean));
+            self.last.flags.glt = self.last.glt > t.glt_threshold;
             let y = t.pca_basis.transpose() * mean;
-            report.pattern = [y.x, y.y];
+            self.last.pattern = [y.x, y.y];
             let mut pca = T::zero();
             for (yi, vi) in y.iter().zip(t.pca_var.iter()) {
                 if *vi > T::zero() {
                     pca += *yi * *yi / *vi;
                 }
             }
-            report.pca = kf * pca;
-            report.flags.pca = report.pca > t.pca_threshold;
-            if !report.glt.finite() || !report.pca.finite() {
+            self.last.pca = kf * pca;
+            self.last.flags.pca = self.last.pca > t.pca_threshold;
+            if !self.last.glt.finite() || !self.last.pca.finite() {
                 // Cannot happen with finite samples; never let NaN decide.
-                report.flags.glt = false;
-                report.flags.pca = false;
+                self.last.flags.glt = false;
+                self.last.flags.pca = false;
                 self.filled = 0;
             }
-            if let Some((ratio, arg)) = self.restart_after_gross(&t, report) {
+            if let Some((ratio, arg)) = self.restart_after_gross(&t) {
                 cusum_ratio = ratio;
                 cusum_arg = arg;
             }
         }
         if self.phase == ParityPhase::Calibrating {
-            self.calibrate(&t, &b, report);
+            self.calibrate(&t, &b);
             return;
         }
         let fault = match self.cfg.detector {
-            ParityDetector::Pca => report.flags.pca,
-            ParityDetector::Glt => report.flags.glt,
-            ParityDetector::Cusum => report.flags.cusum,
-            ParityDetector::GltOrCusum => report.flags.glt || report.flags.cusum,
+            ParityDetector::Pca => self.last.flags.pca,
+            ParityDetector::Glt => self.last.flags.glt,
+            ParityDetector::Cusum => self.last.flags.cusum,
+            ParityDetector::GltOrCusum => self.last.flags.glt || self.last.flags.cusum,
             // Decided per block in `multiscale_block`.
             ParityDetector::Multiscale => return,
         };
-        report.fault = fault;
+        self.last.fault = fault;
 
         // Isolation: the direction that explains the window mean best (or,
         // before the window fills, the CUSUM that fired).
         let basis = if self.filled >= k_win { mean } else { b };
         let (suspect, bias) = isolate(&t, &basis, self.space.active());
-        report.suspect = if self.filled >= k_win {
+        self.last.suspect = if self.filled >= k_win {
             suspect
         } else {
             cusum_arg.or(suspect)
         };
-        report.bias_estimate = bias;
+        self.last.bias_estimate = bias;
 
         if !fault {
             self.suspect_run = (None, 0);
-            let quiet = report.glt < t.glt_threshold * T::lit(0.5) && cusum_ratio < T::lit(0.5);
+            let quiet = self.last.glt < t.glt_threshold * T::lit(0.5) && cusum_ratio < T::lit(0.5);
             if quiet && self.cfg.drift_blocks > T::one() {
                 // Follow slow bias drift (within the bias-instability spec).
                 let gain = T::one() / self.cfg.drift_blocks;
@@ -232,7 +226,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             }
             return;
         }
-        let Some(k) = report.suspect else {
+        let Some(k) = self.last.suspect else {
             return;
         };
         if !self.space.isolable(k) {
@@ -241,8 +235,8 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             self.suspect_run = (None, 0);
             return;
         }
-        if self.vote_to_isolate(k, report) {
-            report.flags = DetectorFlags::default();
+        if self.vote_to_isolate(k) {
+            self.last.flags = DetectorFlags::default();
         }
     }
 
@@ -259,16 +253,12 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// stays keeps the CUSUM rising from there (the alarm stands); a bias
     /// that never reaches the window test's threshold is not affected. The
     /// CUSUM ratio and its argument, recomputed, when a restart happened.
-    fn restart_after_gross(
-        &mut self,
-        t: &Tests<T, N>,
-        report: &mut ParityReport<T, N>,
-    ) -> Option<(T, Option<usize>)> {
-        if report.flags.glt {
+    fn restart_after_gross(&mut self, t: &Tests<T, N>) -> Option<(T, Option<usize>)> {
+        if self.last.flags.glt {
             self.cusum_gross = true;
             return None;
         }
-        let quiet = report.glt.finite() && report.glt < t.glt_threshold * T::lit(0.5);
+        let quiet = self.last.glt.finite() && self.last.glt < t.glt_threshold * T::lit(0.5);
         if !self.cusum_gross || !quiet {
             return None;
         }
@@ -293,35 +283,30 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                 best = (ratio, Some(k));
             }
         }
-        report.cusum_ratio = best.0;
-        report.flags.cusum = best.0 > T::one();
+        self.last.cusum_ratio = best.0;
+        self.last.flags.cusum = best.0 > T::one();
         Some(best)
     }
 
     /// One calibration decision: records each statistic against its
     /// threshold, raises no alarm; at the end scales the thresholds.
-    fn calibrate(
-        &mut self,
-        t: &Tests<T, N>,
-        block: &SVector<T, N>,
-        report: &mut ParityReport<T, N>,
-    ) {
+    fn calibrate(&mut self, t: &Tests<T, N>, block: &SVector<T, N>) {
         let ratios = [
-            report.glt / t.glt_threshold,
+            self.last.glt / t.glt_threshold,
             if t.pca_threshold > T::zero() {
-                report.pca / t.pca_threshold
+                self.last.pca / t.pca_threshold
             } else {
                 T::zero()
             },
-            report.cusum_ratio,
+            self.last.cusum_ratio,
         ];
         for (p, r) in self.peaks.iter_mut().zip(ratios.iter()) {
             if r.finite() && *r > *p {
                 *p = *r;
             }
         }
-        report.flags = DetectorFlags::default();
-        report.fault = false;
+        self.last.flags = DetectorFlags::default();
+        self.last.fault = false;
         // Follow drift during calibration too (the offset keeps learning).
         if self.cfg.drift_blocks > T::one() {
             let gain = T::one() / self.cfg.drift_blocks;

@@ -424,8 +424,10 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// covariances, and a calibration that keeps learning through the
     /// first manoeuvres after training).
     fn learn_quiet(&mut self) {
-        let w = self.work;
-        if w.best_ratio < self.cfg.learn_below {
+        // Only what is used, not the whole work (1,632 bytes for nine
+        // sensors: ≈ 430 instructions of `memcpy` on the M4F).
+        let (best_ratio, p, phi) = (self.work.best_ratio, self.work.p, self.work.phi);
+        if best_ratio < self.cfg.learn_below {
             self.quiet_blocks = self.quiet_blocks.saturating_add(1);
         } else {
             self.quiet_blocks = 0;
@@ -435,7 +437,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             return;
         }
         self.work.out.learning = true;
-        self.learn_calibration(&w.p, &w.phi, true);
+        self.learn_calibration(&p, &phi, true);
         self.learn_oldest();
     }
 
