@@ -30,6 +30,44 @@ pub(super) fn pad<T: Real, const N: usize>(a: &SMatrix<T, N, N>, dim: usize) -> 
     })
 }
 
+/// The [`cholesky_dim`] factor of a covariance that changes only on
+/// learned blocks, in training and in a reconfiguration, kept between its
+/// changes: the block stages read the block covariance's and two window
+/// covariances' factors on every block, and refactorising an unchanged
+/// matrix gives the same bits (the factorisation is deterministic).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct CachedFactor<T: Real, const N: usize> {
+    factor: Option<SMatrix<T, N, N>>,
+    /// `factor` is that of the matrix as it is now.
+    current: bool,
+}
+
+impl<T: Real, const N: usize> CachedFactor<T, N> {
+    /// No factor yet: the first [`get`](Self::get) computes it.
+    pub(super) fn stale() -> Self {
+        Self {
+            factor: None,
+            current: false,
+        }
+    }
+
+    /// The matrix (or the dimension) changed: factorise again on next use.
+    pub(super) fn invalidate(&mut self) {
+        self.current = false;
+    }
+
+    /// The factor of `a` on its leading `dim` coordinates, computed only
+    /// when stale; `a` and `dim` must be those the cache was kept for
+    /// (every change to them calls [`invalidate`](Self::invalidate)).
+    pub(super) fn get(&mut self, a: &SMatrix<T, N, N>, dim: usize) -> Option<&SMatrix<T, N, N>> {
+        if !self.current {
+            self.factor = cholesky_dim(a, dim);
+            self.current = true;
+        }
+        self.factor.as_ref()
+    }
+}
+
 /// Cholesky factor `L` (lower) of the leading `dim × dim` block of `a`
 /// (lower triangle read), identity beyond; `None` when that block is not
 /// positive definite or not finite. The column operations and their order

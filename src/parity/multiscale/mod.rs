@@ -57,7 +57,7 @@ mod staged;
 mod training;
 
 pub use config::MultiscaleConfig;
-use lin::{backward, best_two, cholesky_dim, forward, pad, quad_form};
+use lin::{backward, best_two, cholesky_dim, forward, pad, quad_form, CachedFactor};
 use scale::VibrationScale;
 pub use staged::{BlockStage, Outcome, STAGES};
 
@@ -167,6 +167,12 @@ pub struct Multiscale<T: Real, const N: usize, const W: usize> {
     /// instead of refactorising the same matrix (issue 14; bit-identical,
     /// the factorisation is deterministic).
     cal_current: bool,
+    /// Factors of `block_cov`, of the shortest window's covariance (gross
+    /// test) and of the longest's (offset check), kept while they are
+    /// unchanged (see [`covariances_changed`](Self::covariances_changed)).
+    block_factor: CachedFactor<T, N>,
+    short_factor: CachedFactor<T, N>,
+    long_factor: CachedFactor<T, N>,
 }
 
 impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
@@ -221,6 +227,9 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             trained_blocks: 0,
             work: staged::Work::default(),
             cal_current: false,
+            block_factor: CachedFactor::stale(),
+            short_factor: CachedFactor::stale(),
+            long_factor: CachedFactor::stale(),
         }
     }
 
@@ -425,7 +434,11 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// the relative biases as the flight showed them on average — not the
     /// regression's intercept, which sits wherever the regressors are
     /// centred.
-    pub fn offset_fault(&self, v: &SMatrix<T, N, N>, active: &[bool; N]) -> Option<(usize, T, T)> {
+    pub fn offset_fault(
+        &mut self,
+        v: &SMatrix<T, N, N>,
+        active: &[bool; N],
+    ) -> Option<(usize, T, T)> {
         if !self.cfg.offset_limit.finite() {
             return None;
         }
@@ -437,8 +450,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         // The offset is a long mean: its uncertainty is that of the longest
         // window, not of one block (the block covariance would make every
         // offset look insignificant next to the vibration).
-        let l = cholesky_dim(self.window_cov.last()?, self.dim)?;
-        let (best, second) = best_two(&l, v, &offset, active, self.dim);
+        let l = self.long_factor.get(self.window_cov.last()?, self.dim)?;
+        let (best, second) = best_two(l, v, &offset, active, self.dim);
         let (k, score, bias) = best?;
         let margin = score - second;
         (bias.abs() > self.cfg.offset_limit).then_some((k, bias, margin))
@@ -467,6 +480,14 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         (t * t).max(steady)
     }
 
+    /// `block_cov`, `window_cov` or `dim` changed: their kept factors are
+    /// stale.
+    fn covariances_changed(&mut self) {
+        self.block_factor.invalidate();
+        self.short_factor.invalidate();
+        self.long_factor.invalidate();
+    }
+
     /// Forgets the window (after a reconfiguration) and re-arms the quiet
     /// counter.
     pub fn clear_window(&mut self) {
@@ -481,6 +502,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// the new dimension. The window restarts (its residuals are not
     /// carried).
     pub fn transform_part(&mut self, c: &SMatrix<T, N, N>, dim: usize, part: usize) {
+        self.covariances_changed();
         match part {
             0 => {
                 // A block in work belongs to the old space.

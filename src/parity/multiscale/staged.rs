@@ -197,11 +197,11 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                 let (raw_r, phi, level) = (self.work.raw_r, self.work.phi, self.work.level);
                 let gain = T::one() / self.work.energy.sqrt();
                 let r = raw_r * gain;
-                let Some(lb) = cholesky_dim(&self.block_cov, self.dim) else {
+                let Some(lb) = self.block_factor.get(&self.block_cov, self.dim) else {
                     return self.done(Outcome::Decided(Some(MultiscaleDecision::default())));
                 };
                 // Huber: bound the block's Mahalanobis norm.
-                let norm2 = quad_form(&lb, &r, self.dim);
+                let norm2 = quad_form(lb, &r, self.dim);
                 let norm = norm2.sqrt();
                 let bound = T::lit(self.dim as f64).sqrt() + self.cfg.huber;
                 let clipped = if norm > bound && norm.finite() {
@@ -385,10 +385,10 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         let (Some(rbar), Some(cov)) = (self.raw_mean(short), self.window_cov.first()) else {
             return;
         };
-        let Some(l) = cholesky_dim(cov, self.dim) else {
+        let Some(l) = self.short_factor.get(cov, self.dim) else {
             return;
         };
-        let (best, second) = best_two(&l, v, &rbar, active, self.dim);
+        let (best, second) = best_two(l, v, &rbar, active, self.dim);
         let Some((k, score, bias)) = best else {
             return;
         };
@@ -459,6 +459,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             return;
         };
         self.updates = self.updates.saturating_add(1);
+        self.covariances_changed();
         let wt = T::one() / T::lit(f64::from(self.updates)).min(self.cfg.variance_blocks);
         let d = r * r.transpose();
         self.block_cov = pad(&(self.block_cov * (T::one() - wt) + d * wt), self.dim);
@@ -530,6 +531,54 @@ mod tests {
             // Reused exactly when nothing was learned since the last block.
             assert_eq!(reused, i != 40 && !learn, "block {i}");
         }
+    }
+
+    /// The kept covariance factors are those of the current matrices, bit
+    /// for bit, after a learned block and after a reconfiguration.
+    #[test]
+    fn the_kept_covariance_factors_are_those_of_the_current_matrices() {
+        let cfg = MultiscaleConfig::<f32>::new(0.0175, f32::INFINITY);
+        let mut ms = Multiscale::<f32, 9, 40>::new(cfg, 6, [30.0; SCALES]);
+        let bits = |m: &SMatrix<f32, 9, 9>| m.map(f32::to_bits);
+        let check = |ms: &mut Multiscale<f32, 9, 40>, when: &str| {
+            let dim = ms.dim;
+            let fresh = [
+                cholesky_dim(&ms.block_cov, dim).unwrap(),
+                cholesky_dim(&ms.window_cov[0], dim).unwrap(),
+                cholesky_dim(&ms.window_cov[SCALES - 1], dim).unwrap(),
+            ];
+            let (b, w0, wl) = (ms.block_cov, ms.window_cov[0], ms.window_cov[SCALES - 1]);
+            let kept = [
+                *ms.block_factor.get(&b, dim).unwrap(),
+                *ms.short_factor.get(&w0, dim).unwrap(),
+                *ms.long_factor.get(&wl, dim).unwrap(),
+            ];
+            for (k, f) in kept.iter().zip(fresh.iter()) {
+                assert_eq!(bits(k), bits(f), "{when}");
+            }
+        };
+        check(&mut ms, "new");
+        for i in 0..40 {
+            let (p, phi) = block(i);
+            ms.push(&p, &p, &phi, 1.0, 0.0);
+            ms.decided_means[i] = [Some(p * 3.0); SCALES];
+            ms.norms[i] = 2.0;
+        }
+        ms.quiet_blocks = 40;
+        // A small learning weight: the covariances stay positive definite.
+        ms.updates = 100;
+        for _ in 0..3 {
+            ms.learn_oldest();
+            // The learning moved the matrices: the old factors are stale.
+            check(&mut ms, "learned");
+            ms.head = (ms.head + 1) % 40;
+        }
+        let c = SMatrix::<f32, 9, 9>::from_fn(|i, j| if i < 3 && i == j { 1.0 } else { 0.0 });
+        for part in 0..super::super::TRANSFORM_PARTS {
+            ms.transform_part(&c, 3, part);
+            check(&mut ms, "transformed");
+        }
+        assert_eq!(ms.dim, 3);
     }
 
     /// The attribution's unclipped window mean is the plain mean of the

@@ -22,6 +22,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// in training). `Some(true)` when training is complete, `Some(false)`
     /// when more parts follow, `None` if degenerate.
     pub fn finish_training_part(&mut self, part: usize) -> Option<bool> {
+        // Every part may write `block_cov` or `window_cov`.
+        self.covariances_changed();
         let n = self.filled;
         if n < 8 {
             return None;
