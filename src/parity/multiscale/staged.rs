@@ -15,7 +15,7 @@ use nalgebra::{SMatrix, SVector};
 
 use crate::math::Real;
 
-use super::lin::{best_two, cholesky_dim, pad, quad_form};
+use super::lin::{best_two, cholesky_dim_sum, pad, quad_form};
 use super::training::FINISH_PARTS;
 use super::{Multiscale, MultiscaleDecision, Phi, WindowMean, REGRESSORS, SCALES};
 
@@ -325,9 +325,10 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             return;
         };
         let h = self.early_threshold(*h_steady, *len);
-        let total = cov + self.block_cov * Self::prediction_weight(Some(&self.work.cal), &phibar);
-        // Symmetric as both terms are (`pad` keeps them so).
-        let Some(l) = cholesky_dim(&total, self.dim) else {
+        let w = Self::prediction_weight(Some(&self.work.cal), &phibar);
+        // `cov + block_cov × w`, symmetric as both terms are (`pad` keeps
+        // them so).
+        let Some(l) = cholesky_dim_sum(cov, &self.block_cov, w, self.dim) else {
             return;
         };
         let (best, second) = best_two(&l, v, &rbar, active, self.dim);
@@ -481,6 +482,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::lin::cholesky_dim;
     use super::super::MultiscaleConfig;
     use super::*;
 
