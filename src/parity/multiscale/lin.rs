@@ -130,7 +130,10 @@ pub(super) fn cholesky_dim_sum<T: Real, const N: usize>(
 
 /// Factorises in place the lower triangle of the leading `dim` block of
 /// `l` (identity beyond); `None` when it is not positive definite.
-fn factor_lower<T: Real, const N: usize>(l: &mut SMatrix<T, N, N>, dim: usize) -> Option<()> {
+pub(super) fn factor_lower<T: Real, const N: usize>(
+    l: &mut SMatrix<T, N, N>,
+    dim: usize,
+) -> Option<()> {
     let s = l.as_mut_slice();
     for j in 0..dim {
         let (done, rest) = s.split_at_mut(j * N);

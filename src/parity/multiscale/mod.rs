@@ -57,7 +57,7 @@ mod staged;
 mod training;
 
 pub use config::MultiscaleConfig;
-use lin::{backward, best_two, cholesky_dim, forward, pad, quad_form, CachedFactor};
+use lin::{backward, best_two, factor_lower, forward, pad, quad_form, CachedFactor};
 use scale::VibrationScale;
 pub use staged::{BlockStage, Outcome, STAGES};
 
@@ -299,7 +299,10 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         }
     }
 
-    /// The calibration's Cholesky factor of `sxx + ridge`.
+    /// The calibration's Cholesky factor of `sxx + ridge` (the reference
+    /// the in-place [`factor_calibration`](Self::factor_calibration) is
+    /// checked against).
+    #[cfg(test)]
     fn calibration_factor(&self) -> Option<SMatrix<T, REGRESSORS, REGRESSORS>> {
         let mut a = self.sxx;
         for (i, r) in self.ridge.iter().enumerate() {
@@ -307,7 +310,34 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                 *d += *r;
             }
         }
-        cholesky_dim(&a, REGRESSORS)
+        lin::cholesky_dim(&a, REGRESSORS)
+    }
+
+    /// [`calibration_factor`](Self::calibration_factor)'s factor, computed
+    /// in place in the work: the same entries (`sxx` lower triangle, the
+    /// ridge added on the diagonal, zero above) and the same factorisation,
+    /// without the 1 KB copies of `sxx`, of the factor returned and of its
+    /// store into the work. On `None` the work holds no usable factor
+    /// (`cal_current` stays false, nothing reads it before the next one).
+    fn factor_calibration(&mut self) -> Option<()> {
+        let l = &mut self.work.cal;
+        for (j, (dst, src)) in l
+            .as_mut_slice()
+            .chunks_exact_mut(REGRESSORS)
+            .zip(self.sxx.as_slice().chunks_exact(REGRESSORS))
+            .enumerate()
+        {
+            for (i, (d, s)) in dst.iter_mut().zip(src.iter()).enumerate() {
+                *d = match i.cmp(&j) {
+                    core::cmp::Ordering::Less => T::zero(),
+                    core::cmp::Ordering::Equal => {
+                        *s + self.ridge.as_slice().get(j).copied().unwrap_or(T::zero())
+                    }
+                    core::cmp::Ordering::Greater => *s,
+                };
+            }
+        }
+        factor_lower(l, REGRESSORS)
     }
 
     /// Prior residual `p̄ − C φ` of a block (before it is learned), with the

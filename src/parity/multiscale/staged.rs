@@ -79,7 +79,7 @@ pub(super) struct Work<T: Real, const N: usize> {
     phi: Phi<T>,
     level: T,
     /// Factor of the calibration (`Factor` to `Scale`).
-    cal: SMatrix<T, REGRESSORS, REGRESSORS>,
+    pub(super) cal: SMatrix<T, REGRESSORS, REGRESSORS>,
     raw_r: SVector<T, N>,
     energy: T,
     norm2: T,
@@ -291,7 +291,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// factorised anew. `None` when it cannot be factorised.
     fn current_factor(&mut self) -> Option<()> {
         if !self.cal_current {
-            self.work.cal = self.calibration_factor()?;
+            self.factor_calibration()?;
             self.cal_current = true;
         }
         Some(())
