@@ -3,6 +3,8 @@
 #![allow(clippy::indexing_slicing)]
 
 use crate::math::{cholesky, cholesky_solve_right, Real};
+use nalgebra::{SMatrix, SVector};
+
 use crate::model::{ImuVec, Mat6};
 
 /// \[UKF\] §4 as written: `f̂ = (H G_k)⁻¹ r̄` with `G_k = −B·dt` the fault-input
@@ -41,7 +43,7 @@ pub(crate) fn estimate_as_written_blocks<T: Real>(
     dt: T,
     rbar: &ImuVec<T>,
 ) -> Option<ImuVec<T>> {
-    solve_pivoted_blocks::<T, 3>(h * b * (-dt), *rbar)
+    solve_pivoted_blocks::<T, 6, 3>(h * b * (-dt), *rbar)
 }
 
 /// [`estimate_as_written`] for `H = I` (M1) and an input Jacobian of the
@@ -67,44 +69,11 @@ pub(crate) fn estimate_as_written_identity<T: Real>(
     if !d.iter().all(|p| usable(*p)) {
         return None;
     }
-    // The lower-right block, pivoted as `solve_pivoted` does.
-    let mut a = nalgebra::Matrix3::<T>::from_fn(|i, j| b[(3 + i, 3 + j)] * nd);
-    let mut y = nalgebra::Vector3::new(rbar[3], rbar[4], rbar[5]);
-    for k in 0..3 {
-        let mut p = k;
-        let mut best = a[(k, k)].abs();
-        for i in (k + 1)..3 {
-            let v = a[(i, k)].abs();
-            if v > best {
-                best = v;
-                p = i;
-            }
-        }
-        if best <= T::zero() || !best.finite() {
-            return None;
-        }
-        if p != k {
-            a.swap_rows(p, k);
-            y.swap_rows(p, k);
-        }
-        let inv = T::one() / a[(k, k)];
-        for i in (k + 1)..3 {
-            let f = a[(i, k)] * inv;
-            for j in (k + 1)..3 {
-                let akj = a[(k, j)];
-                a[(i, j)] -= f * akj;
-            }
-            let yk = y[k];
-            y[i] -= f * yk;
-        }
-    }
-    for k in (0..3).rev() {
-        let mut s = y[k];
-        for j in (k + 1)..3 {
-            s -= a[(k, j)] * y[j];
-        }
-        y[k] = s / a[(k, k)];
-    }
+    // The lower-right block, pivoted as `solve_pivoted` does (the same
+    // kernel at 3×3).
+    let y = nalgebra::Vector3::new(rbar[3], rbar[4], rbar[5]);
+    let a = nalgebra::Matrix3::<T>::from_fn(|i, j| b[(3 + i, 3 + j)] * nd);
+    let y = solve_pivoted_blocks::<T, 3, 3>(a, y)?;
     // The first three rows: diagonal `−dt`, coupled to the last three by `S`.
     let mut x = ImuVec::zeros();
     for (k, dk) in d.iter().enumerate() {
@@ -123,7 +92,7 @@ pub(crate) fn estimate_as_written_identity<T: Real>(
 /// generic LU on the Cortex-M4F). `None` when a pivot is zero or the result
 /// is not finite.
 fn solve_pivoted<T: Real>(a: Mat6<T>, b: ImuVec<T>) -> Option<ImuVec<T>> {
-    solve_pivoted_blocks::<T, 6>(a, b)
+    solve_pivoted_blocks::<T, 6, 6>(a, b)
 }
 
 /// [`solve_pivoted`] for an `A` whose rows from `SPLIT` on are zero in the
@@ -132,13 +101,14 @@ fn solve_pivoted<T: Real>(a: Mat6<T>, b: ImuVec<T>) -> Option<ImuVec<T>> {
 /// eliminated, only among the rows before `SPLIT` — the rows below would
 /// never win the search and are eliminated with a zero multiplier, so the
 /// values are those of [`solve_pivoted`] (a zero's sign aside). `SPLIT = 6`
-/// is the general elimination.
-fn solve_pivoted_blocks<T: Real, const SPLIT: usize>(
-    mut a: Mat6<T>,
-    mut b: ImuVec<T>,
-) -> Option<ImuVec<T>> {
-    for k in 0..6 {
-        let end = if k < SPLIT { SPLIT.min(6) } else { 6 };
+/// is the general elimination; `D` is the size (6 here, 3 for the lower-right
+/// block of [`estimate_as_written_identity`]).
+fn solve_pivoted_blocks<T: Real, const D: usize, const SPLIT: usize>(
+    mut a: SMatrix<T, D, D>,
+    mut b: SVector<T, D>,
+) -> Option<SVector<T, D>> {
+    for k in 0..D {
+        let end = if k < SPLIT { SPLIT.min(D) } else { D };
         let mut p = k;
         let mut best = a[(k, k)].abs();
         for i in (k + 1)..end {
@@ -158,7 +128,7 @@ fn solve_pivoted_blocks<T: Real, const SPLIT: usize>(
         let inv = T::one() / a[(k, k)];
         for i in (k + 1)..end {
             let f = a[(i, k)] * inv;
-            for j in (k + 1)..6 {
+            for j in (k + 1)..D {
                 let akj = a[(k, j)];
                 a[(i, j)] -= f * akj;
             }
@@ -166,9 +136,9 @@ fn solve_pivoted_blocks<T: Real, const SPLIT: usize>(
             b[i] -= f * bk;
         }
     }
-    for k in (0..6).rev() {
+    for k in (0..D).rev() {
         let mut s = b[k];
-        for j in (k + 1)..6 {
+        for j in (k + 1)..D {
             s -= a[(k, j)] * b[j];
         }
         b[k] = s / a[(k, k)];

@@ -424,8 +424,10 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         out
     }
 
-    /// Mean of the newest `len` unclipped residuals.
-    fn raw_mean(&self, len: usize) -> Option<SVector<T, N>> {
+    /// Mean of the newest `len` unclipped residuals, in sensor units or
+    /// (`standardised`) each times its own block's gain; `None` until `len`
+    /// blocks are stored.
+    fn raw_mean(&self, len: usize, standardised: bool) -> Option<SVector<T, N>> {
         if len == 0 || self.filled < len {
             return None;
         }
@@ -434,24 +436,10 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         for _ in 0..len {
             idx = (idx + W - 1) % W.max(1);
             if let Some(r) = self.raw.get(idx) {
-                s += r;
-            }
-        }
-        Some(s / T::lit(len as f64))
-    }
-
-    /// Mean of the newest `len` residuals standardised (each by its own
-    /// block's gain) but not clipped; `None` until `len` blocks are stored.
-    fn unclipped_mean(&self, len: usize) -> Option<SVector<T, N>> {
-        if len == 0 || self.filled < len {
-            return None;
-        }
-        let mut s = SVector::<T, N>::zeros();
-        let mut idx = self.head;
-        for _ in 0..len {
-            idx = (idx + W - 1) % W.max(1);
-            if let (Some(r), Some(g)) = (self.raw.get(idx), self.gains.get(idx)) {
-                s += r * *g;
+                match self.gains.get(idx) {
+                    Some(g) if standardised => s += r * *g,
+                    _ => s += r,
+                }
             }
         }
         Some(s / T::lit(len as f64))
