@@ -111,7 +111,14 @@ impl<T: Real> DecisionRule<'_, T> {
         rbar: &ImuVec<T>,
         weight: &ImuVec<T>,
     ) -> [i8; NZ] {
-        match self.detector {
+        // Without the feature `alt-detectors` the configuration admits only
+        // GLR (`UkfMonitorConfig::validate`): the other rules are left out.
+        let detector = if cfg!(feature = "alt-detectors") {
+            self.detector
+        } else {
+            Detector::RuntimeMatrixGlr
+        };
+        match detector {
             Detector::Threshold => {
                 let mut d = [0i8; NZ];
                 let diag = m_eff.diagonal();

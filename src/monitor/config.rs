@@ -24,7 +24,9 @@ pub enum ConfigError {
     AidingDelay,
     /// This option needs a cargo feature the crate was built without
     /// (`estimate_aiding_delay` and `estimate_heading_offset`:
-    /// `aiding-estimators`).
+    /// `aiding-estimators`; `fault_psd`: `fault-tracking`; M2 `aiding`:
+    /// `m2-aiding`; a `detector` other than GLR: `alt-detectors`; a
+    /// `statistic` other than `Normalized`: `t-statistics`).
     NotCompiled(&'static str),
 }
 
@@ -36,6 +38,19 @@ impl ConfigError {
             Self::TTest => "alpha",
             Self::NonPositive(f) | Self::OutOfRange(f) | Self::NotCompiled(f) => f,
             Self::AidingDelay => "aiding_delay_s",
+        }
+    }
+
+    /// The cargo feature a [`NotCompiled`](Self::NotCompiled) field needs
+    /// (`None` for the other errors).
+    pub fn feature(&self) -> Option<&'static str> {
+        match self {
+            Self::NotCompiled("fault_psd") => Some("fault-tracking"),
+            Self::NotCompiled("aiding") => Some("m2-aiding"),
+            Self::NotCompiled("detector") => Some("alt-detectors"),
+            Self::NotCompiled("statistic") => Some("t-statistics"),
+            Self::NotCompiled(_) => Some("aiding-estimators"),
+            _ => None,
         }
     }
 }
@@ -59,7 +74,8 @@ impl fmt::Display for ConfigError {
             ),
             Self::NotCompiled(_) => write!(
                 f,
-                "{field}: needs the crate's `aiding-estimators` feature (on by default)"
+                "{field}: needs the crate's `{}` feature (on by default)",
+                self.feature().unwrap_or_default()
             ),
         }
     }
@@ -454,9 +470,89 @@ impl<T: Real> UkfMonitorConfig<T> {
                 return Err(ConfigError::NotCompiled("estimate_heading_offset"));
             }
         }
+        if !cfg!(feature = "m2-aiding") && self.aiding == AidingKind::GnssAttitude {
+            return Err(ConfigError::NotCompiled("aiding"));
+        }
+        if !cfg!(feature = "alt-detectors") && self.detector != Detector::RuntimeMatrixGlr {
+            return Err(ConfigError::NotCompiled("detector"));
+        }
+        if !cfg!(feature = "t-statistics") && self.statistic != Statistic::Normalized {
+            return Err(ConfigError::NotCompiled("statistic"));
+        }
         if !cfg!(feature = "fault-tracking") && self.fault_psd.is_some() {
             return Err(ConfigError::NotCompiled("fault_psd"));
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn not_compiled_names_its_feature() {
+        assert_eq!(
+            ConfigError::NotCompiled("aiding").feature(),
+            Some("m2-aiding")
+        );
+        assert_eq!(
+            ConfigError::NotCompiled("fault_psd").feature(),
+            Some("fault-tracking")
+        );
+        assert_eq!(
+            ConfigError::NotCompiled("estimate_heading_offset").feature(),
+            Some("aiding-estimators")
+        );
+        assert_eq!(
+            ConfigError::NotCompiled("detector").feature(),
+            Some("alt-detectors")
+        );
+        assert_eq!(
+            ConfigError::NotCompiled("statistic").feature(),
+            Some("t-statistics")
+        );
+        assert_eq!(ConfigError::TTest.feature(), None);
+        let msg = format!("{}", ConfigError::NotCompiled("aiding"));
+        assert_eq!(
+            msg,
+            "aiding: needs the crate's `m2-aiding` feature (on by default)"
+        );
+    }
+
+    /// M2 aiding, the other decision rules and the t statistics are
+    /// accepted exactly when their code is compiled in (`cargo test --lib
+    /// --no-default-features` runs the other arm).
+    #[test]
+    fn options_need_their_features() {
+        let check = |c: UkfMonitorConfig<f64>, field: &'static str, on: bool| {
+            let want = if on {
+                Ok(())
+            } else {
+                Err(ConfigError::NotCompiled(field))
+            };
+            assert_eq!(c.validate(), want, "{field}");
+        };
+        check(
+            UkfMonitorConfig::aircraft(),
+            "aiding",
+            cfg!(feature = "m2-aiding"),
+        );
+        for d in [
+            Detector::Threshold,
+            Detector::PaperMatrix,
+            Detector::PaperMatrixAsPrinted,
+            Detector::RuntimeMatrix,
+        ] {
+            let mut c = UkfMonitorConfig::auv();
+            c.detector = d;
+            check(c, "detector", cfg!(feature = "alt-detectors"));
+        }
+        for st in [Statistic::Raw, Statistic::Whitened] {
+            let mut c = UkfMonitorConfig::auv();
+            c.statistic = st;
+            check(c, "statistic", cfg!(feature = "t-statistics"));
+        }
+        assert_eq!(UkfMonitorConfig::<f64>::auv().validate(), Ok(()));
     }
 }

@@ -14,7 +14,7 @@ use crate::monitor::{ChannelState, Health, Phase};
 impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// Row scale that turns a raw innovation into a window sample.
     fn window_scale(&self) -> ImuVec<T> {
-        match self.cfg.statistic {
+        match self.statistic() {
             Statistic::Raw => ImuVec::from_element(T::one()),
             Statistic::Whitened | Statistic::Normalized => {
                 self.latest_variance.map(|v| T::one() / v.sqrt_fast())
@@ -101,7 +101,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             tstat,
             rbar,
             weight,
-        } = window_evidence(&self.windows, self.cfg.statistic, self.cfg.outlier_k);
+        } = window_evidence(&self.windows, self.statistic(), self.cfg.outlier_k);
         // The learned inflation: the test and the GLR weigh each window mean
         // by the spread it has on this vehicle's healthy data.
         let mut tstat = tstat;
@@ -147,7 +147,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // on the zero blocks, and for M1 on the identity (the same values,
         // issue 17).
         let b = self.last_input_b();
-        let as_written = if self.meas.is_affine() {
+        let as_written = if self.m1() {
             estimate_as_written_identity(&b, self.last_dt, &raw_mean)
         } else {
             estimate_as_written_blocks(&self.last_h, &b, self.last_dt, &raw_mean)
@@ -206,7 +206,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         if self.cfg.max_innovation_inflation <= T::one() {
             return;
         }
-        let ev = window_evidence(&self.windows, self.cfg.statistic, self.cfg.outlier_k);
+        let ev = window_evidence(&self.windows, self.statistic(), self.cfg.outlier_k);
         let clip = T::lit(100.0);
         for (((s, n), t), full) in self
             .inflation_sum
@@ -233,7 +233,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// fewer than 2·W windows keep 1.
     pub(super) fn freeze_inflation(&mut self) {
         let nu = W.saturating_sub(1) as f64;
-        let (white, var) = match self.cfg.statistic {
+        let (white, var) = match self.statistic() {
             Statistic::Normalized => (1.0, 2.0),
             _ if nu > 4.0 => {
                 let e2 = nu / (nu - 2.0);

@@ -27,6 +27,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         cfg!(feature = "fault-tracking") && self.cfg.fault_psd.is_some()
     }
 
+    /// The aiding is M1 (DVL + compass, `h` affine in the state): configured,
+    /// or the only kind compiled in (without the feature `m2-aiding` M2's
+    /// update and estimate are dead and left out of the image, ≈ 9 KB).
+    pub(super) fn m1(&self) -> bool {
+        !cfg!(feature = "m2-aiding") || self.meas.is_affine()
+    }
+
     /// The heading-offset estimate runs (see [`delay_on`](Self::delay_on)).
     pub(super) fn heading_on(&self) -> bool {
         cfg!(feature = "aiding-estimators") && self.cfg.estimate_heading_offset

@@ -43,6 +43,17 @@ const MEAS_ANGLES: [bool; NZ] = [false, false, false, true, true, true];
 /// anything larger is a fault from power-on, not a nominal error.
 const MAX_NOMINAL_BIAS_FACTOR: f64 = 20.0;
 
+/// The configured window statistic, or the normalised one when the t-tests
+/// are not compiled in (feature `t-statistics`; the configuration is then
+/// refused with any other, so this only lets the compiler leave them out).
+fn statistic_in_use<T>(cfg: &UkfMonitorConfig<T>) -> Statistic {
+    if cfg!(feature = "t-statistics") {
+        cfg.statistic
+    } else {
+        Statistic::Normalized
+    }
+}
+
 /// The UKF innovation monitor (\[UKF\], SPEC §4–6, §8a) for one IMU.
 ///
 /// Call [`step`](Self::step) once per IMU period with the measured `dt` and
@@ -65,8 +76,8 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     gate: Gate<T, NZ>,
     /// Consecutive gate rejections per aiding channel.
     rejection_run: [u16; NZ],
-    ttest: TTest<T>,
-    z_threshold: T,
+    /// Critical value of the window statistic in use (`t_threshold`).
+    threshold: T,
     windows: [InnovationWindow<T, W>; NZ],
     since_seen: [T; NZ],
     /// Time since each aiding channel was last fused, s.
@@ -113,14 +124,27 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// A monitor waiting for its first attitude measurement.
     pub fn new(cfg: UkfMonitorConfig<T>) -> Result<Self, ConfigError> {
         cfg.validate()?;
-        let ttest = TTest::new(cfg.alpha, W).map_err(|_| ConfigError::TTest)?;
+        // The t quantile is computed (and must exist) whenever the t-tests
+        // are compiled in, as for every statistic before the feature.
+        let t_quantile = if cfg!(feature = "t-statistics") {
+            Some(TTest::<T>::new(cfg.alpha, W).map_err(|_| ConfigError::TTest)?)
+        } else if W < 3 {
+            return Err(ConfigError::TTest);
+        } else {
+            None
+        };
         let z_threshold = T::lit(normal_upper_quantile(cfg.alpha).map_err(|_| ConfigError::TTest)?);
+        let threshold = match (statistic_in_use(&cfg), t_quantile) {
+            (Statistic::Raw | Statistic::Whitened, Some(t)) => t.threshold,
+            _ => z_threshold,
+        };
         let p0 = Mat6::from_diagonal(&cfg.initial_sigma.component_mul(&cfg.initial_sigma));
         let ukf = Ukf::new(StateVec::zeros(), p0, &cfg.sigma, STATE_ANGLES)
             .ok_or(ConfigError::SigmaParams)?;
         let mut meas = MeasurementModel::new(cfg.aiding);
         meas.lever_arm = Vector3::new(cfg.lever_arm[0], cfg.lever_arm[1], cfg.lever_arm[2]);
         let paper_inv = match cfg.detector {
+            _ if !cfg!(feature = "alt-detectors") => None,
             Detector::PaperMatrix => try_inverse(&paper_matrix::<T>(&PAPER_MATRIX_CORRECTED)),
             Detector::PaperMatrixAsPrinted => {
                 try_inverse(&paper_matrix::<T>(&PAPER_MATRIX_AS_PRINTED))
@@ -138,8 +162,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             ukf,
             gate: Gate::new(cfg.gate_sigma, cfg.gate_max_rejections),
             rejection_run: [0; NZ],
-            ttest,
-            z_threshold,
+            threshold,
             windows: core::array::from_fn(|_| InnovationWindow::new()),
             since_seen: [T::lit(1e9); NZ],
             since_fused: [T::lit(NEVER_FUSED_S); NZ],
@@ -184,10 +207,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// The critical value of the window statistic in use (Student-t
     /// quantile, or the normal quantile for [`Statistic::Normalized`]).
     pub fn t_threshold(&self) -> T {
-        match self.cfg.statistic {
-            Statistic::Normalized => self.z_threshold,
-            _ => self.ttest.threshold,
-        }
+        self.threshold
+    }
+    /// The window statistic in use (see [`statistic_in_use`]).
+    fn statistic(&self) -> Statistic {
+        statistic_in_use(&self.cfg)
     }
     /// The current closed-loop signature matrix `M` (rows innovations,
     /// columns faults; raw units).
@@ -437,7 +461,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         let x_prior = *self.ukf.state();
         // M1's Jacobian is the identity (`MeasurementModel::jacobian`).
-        let affine = self.meas.is_affine();
+        let affine = self.m1();
         let h = if affine {
             Mat6::identity()
         } else {
@@ -550,7 +574,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 *v = d.variance;
             }
             if record && d.fused {
-                let v = match self.cfg.statistic {
+                let v = match self.statistic() {
                     Statistic::Raw => d.innovation,
                     Statistic::Whitened | Statistic::Normalized => {
                         d.innovation / d.variance.sqrt_fast()
