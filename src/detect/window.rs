@@ -1,6 +1,6 @@
 use heapless::HistoryBuf;
 
-use crate::math::Real;
+use crate::math::{keep_rolled, rolled, Real};
 
 /// Sample statistics of a full or partial window.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -66,33 +66,45 @@ impl<T: Real, const N: usize> InnovationWindow<T, N> {
     /// genuine step in the window is not trimmed away). Returns the
     /// statistics and how many samples were dropped.
     pub fn stats_trimmed(&self, k: T) -> Option<(WindowStats<T>, usize)> {
-        let full = self.stats()?;
+        // Only with `outlier_k` > 0 (off in the presets): every pass over
+        // the window a rolled loop (`math::rolled`), the same operations in
+        // the same order as `stats` and the unrolled passes before it.
+        let xs = rolled(&self.buf);
+        let full = stats_of(xs, keep_rolled)?;
         if !full.std.finite() || full.std <= T::zero() || !k.finite() || k <= T::zero() {
             return Some((full, 0));
         }
         let limit = k * full.std;
-        let outliers = self
-            .buf
-            .iter()
-            .filter(|x| (**x - full.mean).abs() > limit)
-            .count();
-        if outliers == 0 || outliers * 4 > self.buf.len() {
+        let mut outliers = 0;
+        for x in xs.iter() {
+            keep_rolled();
+            if (*x - full.mean).abs() > limit {
+                outliers += 1;
+            }
+        }
+        if outliers == 0 || outliers * 4 > xs.len() {
             return Some((full, 0));
         }
-        let kept = self.buf.len() - outliers;
+        let kept = xs.len() - outliers;
         if kept < 2 {
             return Some((full, 0));
         }
         let nf = T::lit(kept as f64);
         let mut sum = T::zero();
-        for x in self.buf.iter().filter(|x| (**x - full.mean).abs() <= limit) {
-            sum += *x;
+        for x in xs.iter() {
+            keep_rolled();
+            if (*x - full.mean).abs() <= limit {
+                sum += *x;
+            }
         }
         let mean = sum / nf;
         let mut ss = T::zero();
-        for x in self.buf.iter().filter(|x| (**x - full.mean).abs() <= limit) {
-            let d = *x - mean;
-            ss += d * d;
+        for x in xs.iter() {
+            keep_rolled();
+            if (*x - full.mean).abs() <= limit {
+                let d = *x - mean;
+                ss += d * d;
+            }
         }
         Some((
             WindowStats {
@@ -106,32 +118,111 @@ impl<T: Real, const N: usize> InnovationWindow<T, N> {
 
     /// Mean and standard deviation, or `None` with fewer than two samples.
     pub fn stats(&self) -> Option<WindowStats<T>> {
-        let n = self.buf.len();
-        if n < 2 {
-            return None;
-        }
-        let nf = T::lit(n as f64);
-        let mut sum = T::zero();
-        for x in self.buf.iter() {
-            sum += *x;
-        }
-        let mean = sum / nf;
-        let mut ss = T::zero();
-        for x in self.buf.iter() {
-            let d = *x - mean;
-            ss += d * d;
-        }
-        Some(WindowStats {
-            n,
-            mean,
-            std: (ss / (nf - T::one())).sqrt_fast(),
-        })
+        stats_of(&self.buf, || {})
     }
+}
+
+/// [`InnovationWindow::stats`] of the samples `xs`, with `each` run at the
+/// top of every loop iteration (`keep_rolled` for a rolled loop).
+#[inline(always)]
+fn stats_of<T: Real>(xs: &[T], each: impl Fn()) -> Option<WindowStats<T>> {
+    let n = xs.len();
+    if n < 2 {
+        return None;
+    }
+    let nf = T::lit(n as f64);
+    let mut sum = T::zero();
+    for x in xs.iter() {
+        each();
+        sum += *x;
+    }
+    let mean = sum / nf;
+    let mut ss = T::zero();
+    for x in xs.iter() {
+        each();
+        let d = *x - mean;
+        ss += d * d;
+    }
+    Some(WindowStats {
+        n,
+        mean,
+        std: (ss / (nf - T::one())).sqrt_fast(),
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The trimmed statistics as written before the rolled loops: filters
+    /// over the window.
+    fn trimmed_by_filters(xs: &[f32], k: f32) -> Option<(WindowStats<f32>, usize)> {
+        let full = stats_of(xs, || {})?;
+        if !full.std.is_finite() || full.std <= 0.0 || !k.is_finite() || k <= 0.0 {
+            return Some((full, 0));
+        }
+        let limit = k * full.std;
+        let outliers = xs
+            .iter()
+            .filter(|x| (**x - full.mean).abs() > limit)
+            .count();
+        if outliers == 0 || outliers * 4 > xs.len() || xs.len() - outliers < 2 {
+            return Some((full, 0));
+        }
+        let kept = xs.len() - outliers;
+        let nf = kept as f32;
+        let mut sum = 0.0f32;
+        for x in xs.iter().filter(|x| (**x - full.mean).abs() <= limit) {
+            sum += *x;
+        }
+        let mean = sum / nf;
+        let mut ss = 0.0f32;
+        for x in xs.iter().filter(|x| (**x - full.mean).abs() <= limit) {
+            let d = *x - mean;
+            ss += d * d;
+        }
+        Some((
+            WindowStats {
+                n: kept,
+                mean,
+                std: (ss / (nf - 1.0)).sqrt_fast(),
+            },
+            outliers,
+        ))
+    }
+
+    #[test]
+    fn rolled_trimmed_stats_are_bit_identical() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+        };
+        let mut trimmed = 0;
+        for case in 0..20_000 {
+            let mut w = InnovationWindow::<f32, 10>::new();
+            for i in 0..(2 + case % 9) {
+                // Occasional spikes, so that some windows are trimmed.
+                let spike = if (case + i) % 7 == 0 {
+                    40.0 * next()
+                } else {
+                    0.0
+                };
+                w.push(next() + spike);
+            }
+            let k = 1.0 + 2.0 * (next() + 0.5);
+            let got = w.stats_trimmed(k);
+            let want = trimmed_by_filters(&w.buf, k);
+            let bits = |r: Option<(WindowStats<f32>, usize)>| {
+                r.map(|(s, d)| (s.n, s.mean.to_bits(), s.std.to_bits(), d))
+            };
+            assert_eq!(bits(got), bits(want), "case {case}");
+            trimmed += usize::from(got.is_some_and(|g| g.1 > 0));
+        }
+        assert!(trimmed > 1000, "{trimmed} windows trimmed");
+    }
 
     #[test]
     fn outlier_removal_drops_a_spike_but_not_a_step() {

@@ -7,7 +7,7 @@ use crate::detect::{
     estimate_as_written_blocks, estimate_as_written_identity, estimate_corrected, test_flags,
     window_evidence, DecisionRule, Statistic, WindowEvidence,
 };
-use crate::math::Real;
+use crate::math::{keep_rolled, rolled, rolled_mut, Real};
 use crate::model::{ImuVec, NZ};
 use crate::monitor::{ChannelState, Health, Phase};
 
@@ -208,13 +208,14 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         let ev = window_evidence(&self.windows, self.statistic(), self.cfg.outlier_k);
         let clip = T::lit(100.0);
-        for (((s, n), t), full) in self
-            .inflation_sum
+        // Only with `max_innovation_inflation` > 1, in learning: rolled.
+        for (((s, n), t), full) in rolled_mut(&mut self.inflation_sum)
             .iter_mut()
-            .zip(self.inflation_n.iter_mut())
-            .zip(ev.tstat.iter())
-            .zip(ev.full.iter())
+            .zip(rolled_mut(&mut self.inflation_n).iter_mut())
+            .zip(rolled(&ev.tstat))
+            .zip(rolled(&ev.full))
         {
+            keep_rolled();
             if *full {
                 *s += (*t * *t).min(clip);
                 *n += T::one();
@@ -244,11 +245,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let (white, sd) = (T::lit(white), T::lit(var).sqrt_fast());
         let w = T::lit(W as f64);
         let max = self.cfg.max_innovation_inflation;
-        for ((c, s), n) in self
-            .inflation
+        // Once per learning phase: rolled.
+        for ((c, s), n) in rolled_mut(&mut self.inflation)
             .iter_mut()
-            .zip(self.inflation_sum.iter())
-            .zip(self.inflation_n.iter())
+            .zip(rolled(&self.inflation_sum))
+            .zip(rolled(&self.inflation_n))
         {
             *c = if *n >= T::lit(2.0) * w {
                 let lower = *s / *n - T::lit(2.0) * sd / (*n / w).sqrt_fast();
