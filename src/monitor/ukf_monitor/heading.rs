@@ -287,7 +287,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         };
         let x = turned(self.ukf.state());
         let p = *self.ukf.covariance();
-        self.ukf.reset(x, p);
+        self.reset_filter(x, p);
         let mut shifted = heapless::HistoryBuf::<StateVec<T>, { MAX_DELAY_STEPS + 1 }>::new();
         for s in self.history.oldest_ordered() {
             shifted.write(turned(s));

@@ -239,6 +239,15 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
     }
 
+    /// Overwrites the filter's state and covariance (alignment,
+    /// re-alignment): out of line, one copy for those cold sites (≈ 0.2 KB
+    /// of the firmware, issue 17), while the two-stage filter's hot
+    /// `Ukf::reset` stays inline.
+    #[inline(never)]
+    fn reset_filter(&mut self, x: StateVec<T>, p: Mat6<T>) {
+        self.ukf.reset(x, p);
+    }
+
     /// Clears latched fault decisions (explicit operator reset).
     pub fn reset_faults(&mut self) {
         self.persistence.reset();
@@ -400,7 +409,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             return;
         };
         let s = self.cfg.initial_sigma;
-        self.ukf.reset(x, Mat6::from_diagonal(&s.component_mul(&s)));
+        self.reset_filter(x, Mat6::from_diagonal(&s.component_mul(&s)));
         self.sensitivity = Mat6::zeros();
         self.tracker = fault_track::FaultTracker::new();
         self.phase = Phase::Converging;

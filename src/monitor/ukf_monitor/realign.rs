@@ -157,7 +157,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             }
         }
         self.tracker.forget_states(reset);
-        self.ukf.reset(x, p);
+        self.reset_filter(x, p);
         // The state history (aiding latency) follows the re-aligned state.
         if self.delay_steps > 0 {
             let mut h = heapless::HistoryBuf::<StateVec<T>, { MAX_DELAY_STEPS + 1 }>::new();
