@@ -63,7 +63,13 @@
 //! it, so learning lasts until it has `learn_s` of clean epochs (on the
 //! aircraft 12.5–50 s on seeds 500–519, up to 68 s on 520–559, instead of
 //! 10 s; the report says `Learning` and
-//! `NotMonitored` meanwhile). Each applied step also turns the filter's
+//! `NotMonitored` meanwhile). Once monitoring, a contaminated epoch leaves
+//! a_x and a_y `NotMonitored` (`detection.rs`): learning can end on
+//! straight flight before any block evaluation is precise, and the first
+//! turn then put the whole offset into the velocity innovations (seed 413:
+//! 4 a_x events at 27–31 s with two decisions, 12 with one). Once the
+//! offset is resolved such epochs are rare (0–0.9 % of the monitoring time
+//! on the aircraft). Each applied step also turns the filter's
 //! heading with the corrected yaw aiding (`turn_heading`).
 
 use super::{UkfMonitor, MAX_DELAY_STEPS};
