@@ -5,8 +5,8 @@
 //! steps within about a second, and no flag is raised once a fault has
 //! cleared and 5 s have passed; fault-free hours raise none either. The
 //! same with the aiding 0.2 s late and the latency estimated online, and
-//! with a 3° heading offset learnt (fault-free hours to the target,
-//! the time after faults clear not yet).
+//! with a 3° heading offset learnt (first onset at 60 s: learning lasts
+//! longer there).
 //! CI runs 2 seeds; the ignored tests run 20 (+ 20 held out) and 10 h
 //! (`cargo test --release --test aircraft_episodes -- --ignored --nocapture`,
 //! about a minute; the figures are in docs/results.md).
@@ -39,11 +39,6 @@ fn config(scn: &Scenario, setup: Setup) -> UkfMonitorConfig<f32> {
     let mut c = monitor_config::<f32>(scn, &RunOptions::default());
     c.estimate_aiding_delay = matches!(setup, Setup::EstimateDelay);
     c.estimate_heading_offset = matches!(setup, Setup::EstimateHeading);
-    if c.estimate_heading_offset {
-        // As `estimate_heading_offset`'s documentation advises: the
-        // unresolved offset leaves the velocity innovations non-white.
-        c.persistence = 2;
-    }
     c
 }
 
@@ -322,9 +317,11 @@ fn heading_offset_steps_raise_no_yaw_rate_flag() {
 /// GIVEN a 3° heading offset learnt online and a run whose first seconds
 /// are a turn, WHEN the monitor learns its nominal biases, THEN it does not
 /// learn the horizontal accelerometers' from the turn (the unresolved offset
-/// is in those innovations) and raises no false alarm in 5 min. Before,
-/// seed 304 learnt a_x 0.23 m/s² off and raised 16 events in 5 min, seed
-/// 308 0.13 m/s² off and 34 (`aircraft_heading_offset` runs 30 h).
+/// is in those innovations) beyond the half `min_fault` (0.1 m/s² here) the
+/// contamination rule allows (`heading.rs`), and raises no false alarm in
+/// 5 min. Before that rule, seed 304 learnt a_x 0.23 m/s² off and raised
+/// 16 events in 5 min, seed 308 0.13 m/s² off and 34; measured now 0.003
+/// and 0.063 m/s², 0 events (`aircraft_heading_offset` runs 30 h).
 #[test]
 fn heading_offset_turns_are_not_learnt_as_accelerometer_bias() {
     let mut scn = Scenario::aircraft_fault_free(300.0);
@@ -339,7 +336,8 @@ fn heading_offset_turns_are_not_learnt_as_accelerometer_bias() {
             m.false_alarm_events, m.free_time_s
         );
         assert_eq!(m.false_alarm_events, 0);
-        assert!(err < 0.05, "a_x bias error {err}");
+        let allowed = 0.5 * config(&scn, Setup::EstimateHeading).min_fault[0] as f64;
+        assert!(err < allowed, "a_x bias error {err}");
     }
 }
 
@@ -367,13 +365,16 @@ fn heading_episodes(base: &Scenario, seeds: std::ops::Range<u64>) -> EpisodeTota
 }
 
 /// A 3° heading offset between the attitude aiding and the IMU frame,
-/// learnt from the GNSS velocity (`estimate_heading_offset`): fault-free
-/// hours meet the issue's ≤ 1 false-alarm event per hour; after faults
-/// clear they do not yet (≈ 20 events per hour, open, docs/results.md).
-/// Seeds 200–201 and 100–104 were looked at while designing, 300–309 and
-/// 500–519 while diagnosing; 400–409 and 600–619 were not looked at.
+/// learnt from the GNSS velocity (`estimate_heading_offset`), with the
+/// aircraft preset's one-decision persistence: fault-free hours and the
+/// time after faults clear meet the issue's ≤ 1 false-alarm event per hour,
+/// every episode set ≥ 99 % detected with a step delay median ≤ 1 s
+/// (docs/results.md). Seeds 200–201 and 100–104 were looked at while
+/// designing, 300–309, 410–419 and 500–519 (and 520–559, not run here)
+/// while diagnosing; 400–409 and 600–619 only as totals, 700–719, 420–429
+/// and 800–819 not at all.
 #[test]
-#[ignore = "22 h and 65 seeds of episodes: run with --release -- --ignored"]
+#[ignore = "42 h and 105 seeds of episodes: run with --release -- --ignored"]
 fn aircraft_heading_offset() {
     let mut offset = Scenario::aircraft_fault_free(0.0);
     offset.aiding.heading_offset_rad = 3f64.to_radians();
@@ -390,6 +391,8 @@ fn aircraft_heading_offset() {
         ("seeds 200-201", 200..202),
         ("seeds 300-309", 300..310),
         ("held-out seeds 400-409", 400..410),
+        ("seeds 410-419", 410..420),
+        ("held-out seeds 420-429", 420..430),
     ] {
         let m = fault_free_with(&hour, seeds, Setup::EstimateHeading);
         let h = m.free_time_s / 3600.0;
@@ -403,6 +406,8 @@ fn aircraft_heading_offset() {
         ("seeds 100-104", 100..105),
         ("seeds 500-519", 500..520),
         ("held-out seeds 600-619", 600..620),
+        ("held-out seeds 700-719", 700..720),
+        ("held-out seeds 800-819", 800..820),
     ] {
         let t = heading_episodes(&offset, seeds);
         println!(
@@ -410,16 +415,16 @@ fn aircraft_heading_offset() {
             t.line()
         );
         assert!(t.detected as f64 >= 0.99 * t.episodes as f64, "{name}");
-        // Measured 20 in 1.03 h on 500-519 (46 with one decision, 71
-        // before the learning took only uncontaminated epochs): a bound so
-        // that a change shows.
+        assert!(t.step_delay_median_s <= 1.0, "{name}: step delay median");
+        // The issue's ≤ 1 event per hour (measured 0 on each; 20 in 1.03 h
+        // on 500-519 with persistence 2 before the bias was solved for
+        // with the angle).
         assert!(
-            t.post_clear_events as f64 <= 30.0 * t.post_clear_s / 3600.0,
+            t.post_clear_events as f64 <= t.post_clear_s / 3600.0,
             "{name}"
         );
     }
-    // Learning the offset costs no detection where there is none (step
-    // delay median 1.11 s here, 1.04 s with the default plan: not asserted).
+    // Learning the offset costs no detection where there is none.
     let t = heading_episodes(&Scenario::aircraft_fault_free(0.0), 100..105);
     println!(
         "aircraft, no offset, estimated, first onset 60 s, seeds 100-104: {}",

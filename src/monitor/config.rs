@@ -207,11 +207,12 @@ pub struct UkfMonitorConfig<T> {
     /// biases and learning lasts longer (see `ukf_monitor/heading.rs`,
     /// docs/results.md). Read it with
     /// [`UkfMonitor::heading_offset_estimate`](super::UkfMonitor::heading_offset_estimate).
-    /// Use it with `persistence` 2: the part of the offset not yet resolved
-    /// leaves the velocity innovations non-white, so `alpha` alone does not
-    /// bound the false-alarm rate (measured with one decision, 3° offset:
-    /// 46 and 12 post-clear events per hour on seeds 500–519 and 600–619,
-    /// 20 and 1 with two).
+    /// Epochs the offset not yet resolved may have contaminated beyond half
+    /// `min_fault` leave a_x and a_y `NotMonitored`; with that, one decision
+    /// (`persistence` 1, the aircraft preset) suffices (3° offset: 0
+    /// post-clear events on 85 seeds of episodes, 1 in 2.07 h on 40 more,
+    /// 0 in 42 fault-free hours, step delay median 0.94–0.97 s;
+    /// docs/results.md).
     pub estimate_heading_offset: bool,
     /// Random-walk spectral density of the fault, per channel
     /// ((m/s²)²/s, (rad/s)²/s), for the tracking fault estimate reported

@@ -130,7 +130,15 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             glr_relative: self.cfg.glr_relative,
         };
         let decision = rule.decide(&m_eff, &flags, &rbar, &weight);
-        let monitored = self.monitored(&full);
+        let mut monitored = self.monitored(&full);
+        // An epoch an unresolved heading offset may have contaminated
+        // beyond half the smallest fault (`heading.rs`): the horizontal
+        // accelerometers cannot be judged from it, and the report says so.
+        if self.heading_on() && self.heading.contaminated {
+            for m in monitored.iter_mut().take(2) {
+                *m = false;
+            }
+        }
         let mut masked = decision;
         for (d, m) in masked.iter_mut().zip(monitored.iter()) {
             if !*m {
