@@ -493,26 +493,15 @@ mod tests {
 
     #[test]
     fn not_compiled_names_its_feature() {
-        assert_eq!(
-            ConfigError::NotCompiled("aiding").feature(),
-            Some("m2-aiding")
-        );
-        assert_eq!(
-            ConfigError::NotCompiled("fault_psd").feature(),
-            Some("fault-tracking")
-        );
-        assert_eq!(
-            ConfigError::NotCompiled("estimate_heading_offset").feature(),
-            Some("aiding-estimators")
-        );
-        assert_eq!(
-            ConfigError::NotCompiled("detector").feature(),
-            Some("alt-detectors")
-        );
-        assert_eq!(
-            ConfigError::NotCompiled("statistic").feature(),
-            Some("t-statistics")
-        );
+        for (field, feature) in [
+            ("aiding", "m2-aiding"),
+            ("fault_psd", "fault-tracking"),
+            ("estimate_heading_offset", "aiding-estimators"),
+            ("detector", "alt-detectors"),
+            ("statistic", "t-statistics"),
+        ] {
+            assert_eq!(ConfigError::NotCompiled(field).feature(), Some(feature));
+        }
         assert_eq!(ConfigError::TTest.feature(), None);
         let msg = format!("{}", ConfigError::NotCompiled("aiding"));
         assert_eq!(
