@@ -57,7 +57,7 @@ mod staged;
 mod training;
 
 pub use config::MultiscaleConfig;
-use lin::{backward, best_two, factor_lower, forward, pad, quad_form, CachedFactor};
+use lin::{backward_d, best_two, dot, factor_lower, forward_d, pad, CachedFactor};
 use scale::VibrationScale;
 pub use staged::{BlockStage, Outcome, STAGES};
 
@@ -350,9 +350,10 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     ) -> Option<SVector<T, N>> {
         // `C φ = spx (sxx + ridge)⁻¹ φ`: one solve for the regressor, not
         // one per parity row for `C`.
-        let mut w = *phi;
-        forward(l, w.as_mut_slice(), REGRESSORS);
-        backward(l, w.as_mut_slice(), REGRESSORS);
+        // The kernels at the calibration's fixed size (unrolled; the bits of
+        // `forward` and `backward`).
+        let mut w: [T; REGRESSORS] = forward_d::<T, REGRESSORS, REGRESSORS>(l, phi.as_slice());
+        backward_d(l, &mut w);
         let mut r = *p;
         let dim = self.dim.min(N);
         for (col, wj) in self.spx.as_slice().chunks_exact(N).zip(w.iter()) {
@@ -369,7 +370,10 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// computed once per block by the caller (`None`: no prediction term).
     fn prediction_weight(l: Option<&SMatrix<T, REGRESSORS, REGRESSORS>>, phi: &Phi<T>) -> T {
         // ‖L⁻¹ φ‖² by forward substitution.
-        l.map_or(T::zero(), |l| quad_form(l, phi, REGRESSORS))
+        l.map_or(T::zero(), |l| {
+            let y: [T; REGRESSORS] = forward_d::<T, REGRESSORS, REGRESSORS>(l, phi.as_slice());
+            dot(&y, &y)
+        })
     }
 
     /// Pushes a clipped residual, the raw one and its regressor into the
