@@ -37,8 +37,11 @@ pub(super) fn pad<T: Real, const N: usize>(a: &SMatrix<T, N, N>, dim: usize) -> 
 /// matrix gives the same bits (the factorisation is deterministic).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct CachedFactor<T: Real, const N: usize> {
-    factor: Option<SMatrix<T, N, N>>,
-    /// `factor` is that of the matrix as it is now.
+    /// Factorised in place (no 324-byte copy of a returned factor).
+    factor: SMatrix<T, N, N>,
+    /// The factorisation succeeded.
+    ok: bool,
+    /// `factor` and `ok` are those of the matrix as it is now.
     current: bool,
 }
 
@@ -46,7 +49,8 @@ impl<T: Real, const N: usize> CachedFactor<T, N> {
     /// No factor yet: the first [`get`](Self::get) computes it.
     pub(super) fn stale() -> Self {
         Self {
-            factor: None,
+            factor: SMatrix::identity(),
+            ok: false,
             current: false,
         }
     }
@@ -61,10 +65,10 @@ impl<T: Real, const N: usize> CachedFactor<T, N> {
     /// (every change to them calls [`invalidate`](Self::invalidate)).
     pub(super) fn get(&mut self, a: &SMatrix<T, N, N>, dim: usize) -> Option<&SMatrix<T, N, N>> {
         if !self.current {
-            self.factor = cholesky_dim(a, dim);
+            self.ok = cholesky_dim_in(&mut self.factor, a, dim).is_some();
             self.current = true;
         }
-        self.factor.as_ref()
+        self.ok.then_some(&self.factor)
     }
 }
 
@@ -76,8 +80,22 @@ pub(super) fn cholesky_dim<T: Real, const N: usize>(
     a: &SMatrix<T, N, N>,
     dim: usize,
 ) -> Option<SMatrix<T, N, N>> {
-    let dim = dim.min(N);
     let mut l = SMatrix::<T, N, N>::identity();
+    cholesky_dim_in(&mut l, a, dim)?;
+    Some(l)
+}
+
+/// [`cholesky_dim`] into `l`'s storage (overwritten; on `None` it holds no
+/// factor).
+pub(super) fn cholesky_dim_in<T: Real, const N: usize>(
+    l: &mut SMatrix<T, N, N>,
+    a: &SMatrix<T, N, N>,
+    dim: usize,
+) -> Option<()> {
+    let dim = dim.min(N);
+    // Not `fill_with_identity`: nalgebra's element iterator costs ≈ 3,000
+    // instructions for 9×9 on the M4F.
+    *l = SMatrix::identity();
     for (j, (dst, src)) in l
         .as_mut_slice()
         .chunks_exact_mut(N)
@@ -89,23 +107,24 @@ pub(super) fn cholesky_dim<T: Real, const N: usize>(
             *d = *s;
         }
     }
-    factor_lower(&mut l, dim)?;
-    Some(l)
+    factor_lower(l, dim)
 }
 
-/// [`cholesky_dim`] of `a + b w`, the sum formed on the lower triangle it
+/// [`cholesky_dim`] of `a + b w` into `l`'s leading `dim` block (its lower
+/// triangle; every other entry of `l` is left as it was: nothing that
+/// reads this factor reads them), the sum formed on the lower triangle it
 /// reads only, straight into the factor's storage (the scale tests' `cov +
 /// block_cov × w` as whole 9×9 products and sums, then copied into the
 /// factor, cost ≈ 3 × 81 flops and moves more per window length). Each
 /// entry is `a_ij + b_ij × w`, the operations of the matrix expression.
 pub(super) fn cholesky_dim_sum<T: Real, const N: usize>(
+    l: &mut SMatrix<T, N, N>,
     a: &SMatrix<T, N, N>,
     b: &SMatrix<T, N, N>,
     w: T,
     dim: usize,
-) -> Option<SMatrix<T, N, N>> {
+) -> Option<()> {
     let dim = dim.min(N);
-    let mut l = SMatrix::<T, N, N>::identity();
     for (j, ((dst, sa), sb)) in l
         .as_mut_slice()
         .chunks_exact_mut(N)
@@ -124,8 +143,7 @@ pub(super) fn cholesky_dim_sum<T: Real, const N: usize>(
             *d = *x + *y * w;
         }
     }
-    factor_lower(&mut l, dim)?;
-    Some(l)
+    factor_lower(l, dim)
 }
 
 /// Factorises in place the lower triangle of the leading `dim` block of
@@ -134,6 +152,51 @@ pub(super) fn factor_lower<T: Real, const N: usize>(
     l: &mut SMatrix<T, N, N>,
     dim: usize,
 ) -> Option<()> {
+    // The parity dimensions of up to nine sensors and the calibration's
+    // size with their loops at a compile-time dimension (see
+    // `factor_lower_d`), anything else at run time.
+    match dim.min(N) {
+        2 => factor_lower_d::<T, N, 2>(l),
+        3 => factor_lower_d::<T, N, 3>(l),
+        4 => factor_lower_d::<T, N, 4>(l),
+        5 => factor_lower_d::<T, N, 5>(l),
+        6 => factor_lower_d::<T, N, 6>(l),
+        16 => factor_lower_d::<T, N, 16>(l),
+        d => factor_lower_dyn(l, d),
+    }
+}
+
+/// [`factor_lower`] at a dimension `D` known at compile time: the same
+/// column operations in the same order (issue 14: the run-time loops cost
+/// ≈ 2,500 instructions for the calibration's 16×16 on the M4F).
+fn factor_lower_d<T: Real, const N: usize, const D: usize>(l: &mut SMatrix<T, N, N>) -> Option<()> {
+    let s = l.as_mut_slice();
+    for j in 0..D {
+        for k in 0..j {
+            let f = *s.get(k * N + j)?;
+            for i in j..D {
+                let x = *s.get(k * N + i)?;
+                let d = s.get_mut(j * N + i)?;
+                *d -= f * x;
+            }
+        }
+        let d = s.get_mut(j * N + j)?;
+        if !(*d > T::zero() && d.finite()) {
+            return None;
+        }
+        let root = d.sqrt_fast();
+        *d = root;
+        let inv = T::one() / root;
+        for i in j + 1..D {
+            let x = s.get_mut(j * N + i)?;
+            *x *= inv;
+        }
+    }
+    Some(())
+}
+
+/// [`factor_lower`] at a run-time dimension.
+fn factor_lower_dyn<T: Real, const N: usize>(l: &mut SMatrix<T, N, N>, dim: usize) -> Option<()> {
     let s = l.as_mut_slice();
     for j in 0..dim {
         let (done, rest) = s.split_at_mut(j * N);
@@ -395,12 +458,13 @@ mod tests {
         let b = padded().transpose().map(|x| (x * 0.37) as f32);
         let bits = |m: &SMatrix<f32, 9, 9>| m.map(f32::to_bits);
         for w in [0.0_f32, 0.013, 0.7, 3.1] {
-            let fused = cholesky_dim_sum(&a, &b, w, 6).unwrap();
+            let mut fused = SMatrix::identity();
+            cholesky_dim_sum(&mut fused, &a, &b, w, 6).unwrap();
             let plain = cholesky_dim(&(a + b * w), 6).unwrap();
             assert_eq!(bits(&fused), bits(&plain), "w {w}");
         }
         // Not positive definite: no factor, as for the plain sum.
-        assert!(cholesky_dim_sum(&a, &b, -1e3, 6).is_none());
+        assert!(cholesky_dim_sum(&mut SMatrix::zeros(), &a, &b, -1e3, 6).is_none());
         assert!(cholesky_dim(&(a + b * -1e3), 6).is_none());
     }
 

@@ -173,6 +173,10 @@ pub struct Multiscale<T: Real, const N: usize, const W: usize> {
     block_factor: CachedFactor<T, N>,
     short_factor: CachedFactor<T, N>,
     long_factor: CachedFactor<T, N>,
+    /// The scale tests' factor of `cov + block_cov × w` (new on every
+    /// block and window length): kept here so each test writes only its
+    /// leading block's lower triangle, not a fresh 9×9 identity first.
+    scale_factor: SMatrix<T, N, N>,
 }
 
 impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
@@ -230,6 +234,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             block_factor: CachedFactor::stale(),
             short_factor: CachedFactor::stale(),
             long_factor: CachedFactor::stale(),
+            scale_factor: SMatrix::identity(),
         }
     }
 
@@ -319,25 +324,25 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// without the 1 KB copies of `sxx`, of the factor returned and of its
     /// store into the work. On `None` the work holds no usable factor
     /// (`cal_current` stays false, nothing reads it before the next one).
+    ///
+    /// Only the lower triangle is written: the work's factor is zero above
+    /// the diagonal from `Work::default` on, and nothing ever writes there
+    /// (the factorisation and its solves read the lower triangle only), so
+    /// the 120 zeros need not be stored again on every learned block.
     fn factor_calibration(&mut self) -> Option<()> {
-        let l = &mut self.work.cal;
-        for (j, (dst, src)) in l
-            .as_mut_slice()
-            .chunks_exact_mut(REGRESSORS)
-            .zip(self.sxx.as_slice().chunks_exact(REGRESSORS))
-            .enumerate()
-        {
-            for (i, (d, s)) in dst.iter_mut().zip(src.iter()).enumerate() {
-                *d = match i.cmp(&j) {
-                    core::cmp::Ordering::Less => T::zero(),
-                    core::cmp::Ordering::Equal => {
-                        *s + self.ridge.as_slice().get(j).copied().unwrap_or(T::zero())
-                    }
-                    core::cmp::Ordering::Greater => *s,
+        let l = self.work.cal.as_mut_slice();
+        let (sxx, ridge) = (self.sxx.as_slice(), self.ridge.as_slice());
+        for j in 0..REGRESSORS {
+            let r = ridge.get(j).copied().unwrap_or(T::zero());
+            for i in j..REGRESSORS {
+                let at = j * REGRESSORS + i;
+                let (Some(d), Some(x)) = (l.get_mut(at), sxx.get(at)) else {
+                    return None;
                 };
+                *d = if i == j { *x + r } else { *x };
             }
         }
-        factor_lower(l, REGRESSORS)
+        factor_lower(&mut self.work.cal, REGRESSORS)
     }
 
     /// Prior residual `p̄ − C φ` of a block (before it is learned), with the
@@ -399,16 +404,23 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     }
 
     /// Window means of residual, regressor and gain over each length
-    /// (newest blocks), `None` for a length not yet filled.
-    fn window_means(&self) -> [Option<WindowMean<T, N>>; SCALES] {
-        let mut out = [None; SCALES];
+    /// (newest blocks) into the work, `None` for a length not yet filled.
+    /// Written in place (returned by value they were a ≈ 330-byte copy) and
+    /// the ring walked backwards without a `%` per block; the sums are
+    /// the same, newest block first.
+    fn fill_window_means(&mut self) {
         let mut sr = SVector::<T, N>::zeros();
         let mut sp = Phi::<T>::zeros();
         let mut sg = T::zero();
         let mut idx = self.head;
         let mut scale = 0;
+        self.work.means = [None; SCALES];
         for n in 1..=self.filled {
-            idx = (idx + W - 1) % W.max(1);
+            idx = if idx == 0 {
+                W.saturating_sub(1)
+            } else {
+                idx - 1
+            };
             if let (Some(r), Some(p)) = (self.residuals.get(idx), self.regressors.get(idx)) {
                 sr += r;
                 sp += p;
@@ -419,13 +431,12 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                     break;
                 }
                 let k = T::lit(n as f64);
-                if let Some(slot) = out.get_mut(scale) {
+                if let Some(slot) = self.work.means.get_mut(scale) {
                     *slot = Some((sr / k, sp / k, sg / k));
                 }
                 scale += 1;
             }
         }
-        out
     }
 
     /// Mean of the newest `len` unclipped residuals, in sensor units or
