@@ -37,8 +37,9 @@ pub(super) fn pad<T: Real, const N: usize>(a: &SMatrix<T, N, N>, dim: usize) -> 
 /// matrix gives the same bits (the factorisation is deterministic).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct CachedFactor<T: Real, const N: usize> {
-    /// Factorised in place (no 324-byte copy of a returned factor).
-    factor: SMatrix<T, N, N>,
+    /// Factorised in place (no 324-byte copy of a returned factor); `None`
+    /// until first used (nothing to set up in the configuration).
+    factor: Option<SMatrix<T, N, N>>,
     /// The factorisation succeeded.
     ok: bool,
     /// `factor` and `ok` are those of the matrix as it is now.
@@ -49,7 +50,7 @@ impl<T: Real, const N: usize> CachedFactor<T, N> {
     /// No factor yet: the first [`get`](Self::get) computes it.
     pub(super) fn stale() -> Self {
         Self {
-            factor: SMatrix::identity(),
+            factor: None,
             ok: false,
             current: false,
         }
@@ -65,10 +66,11 @@ impl<T: Real, const N: usize> CachedFactor<T, N> {
     /// (every change to them calls [`invalidate`](Self::invalidate)).
     pub(super) fn get(&mut self, a: &SMatrix<T, N, N>, dim: usize) -> Option<&SMatrix<T, N, N>> {
         if !self.current {
-            self.ok = cholesky_dim_in(&mut self.factor, a, dim).is_some();
+            let f = self.factor.get_or_insert_with(SMatrix::zeros);
+            self.ok = cholesky_dim_in(f, a, dim).is_some();
             self.current = true;
         }
-        self.ok.then_some(&self.factor)
+        self.factor.as_ref().filter(|_| self.ok)
     }
 }
 

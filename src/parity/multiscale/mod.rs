@@ -173,10 +173,6 @@ pub struct Multiscale<T: Real, const N: usize, const W: usize> {
     block_factor: CachedFactor<T, N>,
     short_factor: CachedFactor<T, N>,
     long_factor: CachedFactor<T, N>,
-    /// The scale tests' factor of `cov + block_cov × w` (new on every
-    /// block and window length): kept here so each test writes only its
-    /// leading block's lower triangle, not a fresh 9×9 identity first.
-    scale_factor: SMatrix<T, N, N>,
 }
 
 impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
@@ -234,7 +230,6 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             block_factor: CachedFactor::stale(),
             short_factor: CachedFactor::stale(),
             long_factor: CachedFactor::stale(),
-            scale_factor: SMatrix::identity(),
         }
     }
 

@@ -330,11 +330,12 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         let w = Self::prediction_weight(Some(&self.work.cal), &phibar);
         // `cov + block_cov × w`, symmetric as both terms are (`pad` keeps
         // them so).
-        let l = &mut self.scale_factor;
-        if cholesky_dim_sum(l, cov, &self.block_cov, w, self.dim).is_none() {
+        // Only the leading block's lower triangle is written, and read.
+        let mut l = SMatrix::<T, N, N>::zeros();
+        if cholesky_dim_sum(&mut l, cov, &self.block_cov, w, self.dim).is_none() {
             return;
         }
-        let l = &self.scale_factor;
+        let l = &l;
         let (best, second) = best_two(l, v, &rbar, active, self.dim);
         let Some((k, score, bias)) = best else {
             return;
