@@ -275,6 +275,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         let lambda = T::one() - T::one() / self.cfg.calibration_blocks;
         let dim = self.dim.min(N);
         let phis = phi.as_slice();
+        // The lower triangle over every row with the test inside (a fixed
+        // trip count the compiler unrolls), `forget` decided once.
         for (j, (col, fj)) in self
             .sxx
             .as_mut_slice()
@@ -282,11 +284,18 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             .zip(phis.iter())
             .enumerate()
         {
-            for (x, fi) in col.iter_mut().zip(phis.iter()).skip(j) {
-                if forget {
-                    *x *= lambda;
+            if forget {
+                for (i, (x, fi)) in col.iter_mut().zip(phis.iter()).enumerate() {
+                    if i >= j {
+                        *x = *x * lambda + *fi * *fj;
+                    }
                 }
-                *x += *fi * *fj;
+            } else {
+                for (i, (x, fi)) in col.iter_mut().zip(phis.iter()).enumerate() {
+                    if i >= j {
+                        *x += *fi * *fj;
+                    }
+                }
             }
         }
         for (col, fj) in self.spx.as_mut_slice().chunks_exact_mut(N).zip(phis.iter()) {
