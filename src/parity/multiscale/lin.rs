@@ -479,8 +479,9 @@ mod tests {
     }
 
     /// The unrolled kernels give the bits of the run-time ones (`f32`, as
-    /// on the target): the forward and backward sweeps at the calibration's
-    /// size, and `best_two` at every parity dimension it unrolls.
+    /// on the target): the forward and backward sweeps and the
+    /// factorisation at the calibration's size, the factorisation at 6, and
+    /// `best_two` at every parity dimension it unrolls.
     #[test]
     fn the_unrolled_kernels_are_bit_identical() {
         let bits = |x: &[f32]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
@@ -495,6 +496,17 @@ mod tests {
         backward(&l16, want.as_mut_slice(), 16);
         backward_d(&l16, &mut got);
         assert_eq!(bits(&got), bits(want.as_slice()));
+        // The factorisation at 16 and at 6 (in a 9×9).
+        // (`cholesky_dim` starts from the lower triangle, zero above.)
+        let mut dyn16 =
+            SMatrix::<f32, 16, 16>::from_fn(|i, j| if i >= j { a16[(i, j)] } else { 0.0 });
+        factor_lower_dyn(&mut dyn16, 16).unwrap();
+        assert_eq!(bits(l16.as_slice()), bits(dyn16.as_slice()));
+        let a9 = padded().map(|x| x as f32);
+        let (mut d6, mut r6) = (a9, a9);
+        factor_lower_d::<f32, 9, 6>(&mut d6).unwrap();
+        factor_lower_dyn(&mut r6, 6).unwrap();
+        assert_eq!(bits(d6.as_slice()), bits(r6.as_slice()));
         let v = SMatrix::<f32, 9, 9>::from_fn(|i, j| (((i + 2) * (j + 1)) % 7) as f32 - 3.1);
         let r = SVector::<f32, 9>::from_fn(|i, _| 0.3 * i as f32 - 1.1);
         let mut active = [true; 9];
