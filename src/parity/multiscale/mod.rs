@@ -57,7 +57,7 @@ mod staged;
 mod training;
 
 pub use config::MultiscaleConfig;
-use lin::{backward, best_two, factor_lower, forward, pad, quad_form, CachedFactor};
+use lin::{backward_d, best_two, dot, factor_lower, forward_d, pad, CachedFactor};
 use scale::VibrationScale;
 pub use staged::{BlockStage, Outcome, STAGES};
 
@@ -275,6 +275,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         let lambda = T::one() - T::one() / self.cfg.calibration_blocks;
         let dim = self.dim.min(N);
         let phis = phi.as_slice();
+        // The lower triangle over every row with the test inside (a fixed
+        // trip count the compiler unrolls), `forget` decided once.
         for (j, (col, fj)) in self
             .sxx
             .as_mut_slice()
@@ -282,11 +284,18 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             .zip(phis.iter())
             .enumerate()
         {
-            for (x, fi) in col.iter_mut().zip(phis.iter()).skip(j) {
-                if forget {
-                    *x *= lambda;
+            if forget {
+                for (i, (x, fi)) in col.iter_mut().zip(phis.iter()).enumerate() {
+                    if i >= j {
+                        *x = *x * lambda + *fi * *fj;
+                    }
                 }
-                *x += *fi * *fj;
+            } else {
+                for (i, (x, fi)) in col.iter_mut().zip(phis.iter()).enumerate() {
+                    if i >= j {
+                        *x += *fi * *fj;
+                    }
+                }
             }
         }
         for (col, fj) in self.spx.as_mut_slice().chunks_exact_mut(N).zip(phis.iter()) {
@@ -319,25 +328,25 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// without the 1 KB copies of `sxx`, of the factor returned and of its
     /// store into the work. On `None` the work holds no usable factor
     /// (`cal_current` stays false, nothing reads it before the next one).
+    ///
+    /// Only the lower triangle is written: the work's factor is zero above
+    /// the diagonal from `Work::default` on, and nothing ever writes there
+    /// (the factorisation and its solves read the lower triangle only), so
+    /// the 120 zeros need not be stored again on every learned block.
     fn factor_calibration(&mut self) -> Option<()> {
-        let l = &mut self.work.cal;
-        for (j, (dst, src)) in l
-            .as_mut_slice()
-            .chunks_exact_mut(REGRESSORS)
-            .zip(self.sxx.as_slice().chunks_exact(REGRESSORS))
-            .enumerate()
-        {
-            for (i, (d, s)) in dst.iter_mut().zip(src.iter()).enumerate() {
-                *d = match i.cmp(&j) {
-                    core::cmp::Ordering::Less => T::zero(),
-                    core::cmp::Ordering::Equal => {
-                        *s + self.ridge.as_slice().get(j).copied().unwrap_or(T::zero())
-                    }
-                    core::cmp::Ordering::Greater => *s,
+        let l = self.work.cal.as_mut_slice();
+        let (sxx, ridge) = (self.sxx.as_slice(), self.ridge.as_slice());
+        for j in 0..REGRESSORS {
+            let r = ridge.get(j).copied().unwrap_or(T::zero());
+            for i in j..REGRESSORS {
+                let at = j * REGRESSORS + i;
+                let (Some(d), Some(x)) = (l.get_mut(at), sxx.get(at)) else {
+                    return None;
                 };
+                *d = if i == j { *x + r } else { *x };
             }
         }
-        factor_lower(l, REGRESSORS)
+        factor_lower(&mut self.work.cal, REGRESSORS)
     }
 
     /// Prior residual `p̄ − C φ` of a block (before it is learned), with the
@@ -350,9 +359,10 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     ) -> Option<SVector<T, N>> {
         // `C φ = spx (sxx + ridge)⁻¹ φ`: one solve for the regressor, not
         // one per parity row for `C`.
-        let mut w = *phi;
-        forward(l, w.as_mut_slice(), REGRESSORS);
-        backward(l, w.as_mut_slice(), REGRESSORS);
+        // The kernels at the calibration's fixed size (unrolled; the bits of
+        // `forward` and `backward`).
+        let mut w: [T; REGRESSORS] = forward_d::<T, REGRESSORS, REGRESSORS>(l, phi.as_slice());
+        backward_d(l, &mut w);
         let mut r = *p;
         let dim = self.dim.min(N);
         for (col, wj) in self.spx.as_slice().chunks_exact(N).zip(w.iter()) {
@@ -369,7 +379,10 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// computed once per block by the caller (`None`: no prediction term).
     fn prediction_weight(l: Option<&SMatrix<T, REGRESSORS, REGRESSORS>>, phi: &Phi<T>) -> T {
         // ‖L⁻¹ φ‖² by forward substitution.
-        l.map_or(T::zero(), |l| quad_form(l, phi, REGRESSORS))
+        l.map_or(T::zero(), |l| {
+            let y: [T; REGRESSORS] = forward_d::<T, REGRESSORS, REGRESSORS>(l, phi.as_slice());
+            dot(&y, &y)
+        })
     }
 
     /// Pushes a clipped residual, the raw one and its regressor into the
@@ -395,16 +408,23 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     }
 
     /// Window means of residual, regressor and gain over each length
-    /// (newest blocks), `None` for a length not yet filled.
-    fn window_means(&self) -> [Option<WindowMean<T, N>>; SCALES] {
-        let mut out = [None; SCALES];
+    /// (newest blocks) into the work, `None` for a length not yet filled.
+    /// Written in place (returned by value they were a ≈ 330-byte copy) and
+    /// the ring walked backwards without a `%` per block; the sums are
+    /// the same, newest block first.
+    fn fill_window_means(&mut self) {
         let mut sr = SVector::<T, N>::zeros();
         let mut sp = Phi::<T>::zeros();
         let mut sg = T::zero();
         let mut idx = self.head;
         let mut scale = 0;
+        self.work.means = [None; SCALES];
         for n in 1..=self.filled {
-            idx = (idx + W - 1) % W.max(1);
+            idx = if idx == 0 {
+                W.saturating_sub(1)
+            } else {
+                idx - 1
+            };
             if let (Some(r), Some(p)) = (self.residuals.get(idx), self.regressors.get(idx)) {
                 sr += r;
                 sp += p;
@@ -415,13 +435,12 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                     break;
                 }
                 let k = T::lit(n as f64);
-                if let Some(slot) = out.get_mut(scale) {
+                if let Some(slot) = self.work.means.get_mut(scale) {
                     *slot = Some((sr / k, sp / k, sg / k));
                 }
                 scale += 1;
             }
         }
-        out
     }
 
     /// Mean of the newest `len` unclipped residuals, in sensor units or

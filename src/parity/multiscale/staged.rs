@@ -84,7 +84,8 @@ pub(super) struct Work<T: Real, const N: usize> {
     energy: T,
     norm2: T,
     clipped: SVector<T, N>,
-    means: [Option<WindowMean<T, N>>; SCALES],
+    /// Window means (`Window` to `Scale`).
+    pub(super) means: [Option<WindowMean<T, N>>; SCALES],
     best_ratio: T,
     isolate: Option<(usize, T)>,
     out: MultiscaleDecision<T>,
@@ -210,14 +211,15 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                     r
                 };
                 self.push(&clipped, &raw_r, &phi, gain, level);
-                self.work.means = self.window_means();
+                self.fill_window_means();
                 let newest = (self.head + W - 1) % W.max(1);
-                let means = self.work.means;
                 if let Some(slot) = self.norms.get_mut(newest) {
                     *slot = norm2;
                 }
                 if let Some(slot) = self.decided_means.get_mut(newest) {
-                    *slot = means.map(|m| m.map(|(rbar, _, _)| rbar));
+                    for (d, m) in slot.iter_mut().zip(self.work.means.iter()) {
+                        *d = m.map(|(rbar, _, _)| rbar);
+                    }
                 }
                 self.work.norm2 = norm2;
                 self.work.clipped = clipped;
@@ -328,10 +330,13 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         let w = Self::prediction_weight(Some(&self.work.cal), &phibar);
         // `cov + block_cov × w`, symmetric as both terms are (`pad` keeps
         // them so).
-        let Some(l) = cholesky_dim_sum(cov, &self.block_cov, w, self.dim) else {
+        // Only the leading block's lower triangle is written, and read.
+        let mut l = SMatrix::<T, N, N>::zeros();
+        if cholesky_dim_sum(&mut l, cov, &self.block_cov, w, self.dim).is_none() {
             return;
-        };
-        let (best, second) = best_two(&l, v, &rbar, active, self.dim);
+        }
+        let l = &l;
+        let (best, second) = best_two(l, v, &rbar, active, self.dim);
         let Some((k, score, bias)) = best else {
             return;
         };
@@ -352,7 +357,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         // instead of 1/1/2/1).
         if ratio > T::one() && i >= 1 {
             if let Some(u) = self.raw_mean(usize::from(*len), true) {
-                if let (Some((ku, su, _)), second_u) = best_two(&l, v, &u, active, self.dim) {
+                if let (Some((ku, su, _)), second_u) = best_two(l, v, &u, active, self.dim) {
                     if ku == k {
                         margin = margin.max(su - second_u);
                     }
