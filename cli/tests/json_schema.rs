@@ -196,6 +196,10 @@ fn logs() {
     for k in ["monitoring_from_s", "alarms", "isolations"] {
         assert!(v["gyro"].get(k).is_some(), "{k}");
     }
+    // The gyros' flight default tests power-up offsets, the accelerometers'
+    // cannot (rectification): said, not left as a silent "healthy".
+    assert_eq!(v["gyro"]["power_up_judged"], true);
+    assert_eq!(v["accel"]["power_up_judged"], false);
     let v = json(&[
         "parity-table",
         &log,

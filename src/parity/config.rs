@@ -67,6 +67,20 @@ pub struct ParityConfig<T> {
 }
 
 impl<T: Real> ParityConfig<T> {
+    /// Whether a bias a sensor carries from power-up is judged. Training
+    /// learns the sensors' relative offsets (their turn-on biases) in
+    /// every detector, so such a fault is only reported by the multi-scale
+    /// tests' offset test, which needs a finite
+    /// [`offset_limit`](MultiscaleConfig::offset_limit): the gyro default
+    /// ([`Self::gyro_flight`]), not the accelerometer one nor the
+    /// white-noise tests. When this is false the monitor cannot tell a
+    /// sensor faulty since power-up from a healthy one with its turn-on
+    /// offset, and its "healthy" covers only faults that appear after
+    /// training (`parity-replay` reports it as `power_up_judged`).
+    pub fn judges_power_up_offsets(&self) -> bool {
+        matches!(self.detector, ParityDetector::Multiscale) && self.multiscale.offset_limit.finite()
+    }
+
     /// Spends a fault-free lead-in of `samples` on training and, when
     /// calibration is enabled, calibration: two thirds train, the rest
     /// calibrates.
@@ -164,5 +178,21 @@ impl<T: Real> ParityConfig<T> {
             },
             ..Self::gyro_flight(rate_hz, fs)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_a_finite_offset_limit_judges_power_up_offsets() {
+        assert!(ParityConfig::<f32>::gyro_flight(49.0, 35.0).judges_power_up_offsets());
+        assert!(!ParityConfig::<f32>::accel_flight(49.0, 157.0).judges_power_up_offsets());
+        // The white-noise tests learn the offset in training too.
+        assert!(!ParityConfig::<f32>::gyro(49.0, 35.0).judges_power_up_offsets());
+        let mut c = ParityConfig::<f32>::accel_flight(49.0, 157.0);
+        c.multiscale.offset_limit = 1.0;
+        assert!(c.judges_power_up_offsets());
     }
 }

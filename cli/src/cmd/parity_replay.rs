@@ -29,7 +29,7 @@ pub(crate) struct Args {
     #[arg(long, value_delimiter = ',')]
     inject: Vec<f64>,
     /// Print one JSON object instead of text: {"gyro": {"monitoring_from_s",
-    /// "alarms": [{"start_s", "end_s", "sensor"}], "isolations": [{"sensor",
+    /// "power_up_judged", "alarms": [{"start_s", "end_s", "sensor"}], "isolations": [{"sensor",
     /// "t_s"}], "statuses": [...]}, "accel": {...}}, sensor = 3·IMU + axis.
     #[arg(long)]
     json: bool,
@@ -171,6 +171,11 @@ pub(crate) fn parity_replay_cmd(
                 }
                 None => out!("  never monitoring: the log ends before training does"),
             }
+        }
+        if !r.power_up_judged {
+            // Never silent: "no alarm" here does not cover a sensor that
+            // was already faulty when training began.
+            out!("  a bias present since power-up is not judged (learned as the sensor's turn-on offset)");
         }
         out!("  parity alarms: {}", fmt(&r.alarms));
         let iso: Vec<String> = r

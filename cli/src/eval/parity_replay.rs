@@ -136,6 +136,9 @@ pub struct Injection {
 pub struct ParityReplay {
     /// Log time training ended (monitoring began).
     pub monitoring_from: Option<f64>,
+    /// Whether a bias present since power-up is judged
+    /// ([`ParityConfig::judges_power_up_offsets`]).
+    pub power_up_judged: bool,
     /// Threshold factors `[GLT, PCA, CUSUM]` set by calibration.
     pub threshold_scales: [f64; 3],
     /// Training's correlation factor (block variance ÷ white-noise value).
@@ -290,13 +293,17 @@ pub fn replay_parity_observed(
             c
         }
     };
+    let power_up_judged = cfg.judges_power_up_offsets();
     let geometry = Geometry::<f32, 9>::triads(&[Matrix3::identity(); 3])
         .map_err(|e| anyhow::anyhow!("{e:?}"))?;
     let mut monitor =
         ParityMonitor::<f32, 9, 40>::new(&geometry, cfg).map_err(|e| anyhow::anyhow!("{e:?}"))?;
     let mut px4 = Px4Like::<3>::new(kind == ArrayKind::Gyro);
     let mut ap = ArduPilotLike::new(kind == ArrayKind::Gyro);
-    let mut out = ParityReplay::default();
+    let mut out = ParityReplay {
+        power_up_judged,
+        ..ParityReplay::default()
+    };
     let (mut was, mut was_sat, mut was_px4, mut was_ap) = (false, false, false, false);
     let mut prev_t = None;
     for (t, row) in log.t.iter().zip(log.imus.iter()) {

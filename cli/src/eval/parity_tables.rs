@@ -166,8 +166,9 @@ pub fn power_up_table(
 
 /// The replay of both sensor kinds as one JSON object (the schema of
 /// `imu-fdi-sim parity-replay --json`): `{"gyro": {"monitoring_from_s",
-/// "alarms": [{"start_s", "end_s", "sensor"}], "isolations": [{"sensor",
-/// "t_s"}], "statuses": [{"sensor", "status", "t_s"}]}, "accel": {…}}`,
+/// "power_up_judged", "alarms": [{"start_s", "end_s", "sensor"}],
+/// "isolations": [{"sensor", "t_s"}], "statuses": [{"sensor", "status",
+/// "t_s"}]}, "accel": {…}}`,
 /// sensor = 3 × IMU + axis, times in seconds of the file's clock, `null`
 /// where a value does not exist (no monitoring, no suspect).
 pub fn replay_json(
@@ -205,6 +206,7 @@ pub fn replay_json(
             name.into(),
             serde_json::json!({
                 "monitoring_from_s": r.monitoring_from,
+                "power_up_judged": r.power_up_judged,
                 "alarms": alarms,
                 "isolations": isolations,
                 "statuses": statuses,
