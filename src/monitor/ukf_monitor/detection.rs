@@ -27,10 +27,22 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let dt_learn = self.phase_time - self.learn_clock;
         self.learn_clock = self.phase_time;
         // Instant estimate from the latest innovation of every channel; only
-        // computed when the learner or the drift tracker will use it.
+        // computed when the learner or the drift tracker will use it. Not
+        // the horizontal accelerometers' from an epoch an unresolved
+        // heading offset may have contaminated (`heading.rs`).
         let instant = |s: &Self| {
             let w = s.latest_variance.map(|v| T::one() / v);
-            estimate_corrected(&s.signature, &w, &s.latest_innovation, &[true; NZ])
+            let f = estimate_corrected(&s.signature, &w, &s.latest_innovation, &[true; NZ]);
+            if s.heading_on() && s.heading.contaminated {
+                f.map(|mut f| {
+                    for v in f.iter_mut().take(2) {
+                        *v = T::zero();
+                    }
+                    f
+                })
+            } else {
+                f
+            }
         };
         // Nothing is learned while the statistics are held (a bad sample, a
         // re-alignment, aiding back after a loss): the innovations then
@@ -41,14 +53,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         match self.phase {
             Phase::Learning => {
                 self.learn_inflation();
-                if let Some(mut f) = if held { None } else { instant(self) } {
-                    // Not the accelerometers' from an epoch an unresolved
-                    // heading offset may have contaminated (`heading.rs`).
-                    if self.heading_on() && self.heading.contaminated {
-                        for v in f.iter_mut().take(2) {
-                            *v = T::zero();
-                        }
-                    }
+                if let Some(f) = if held { None } else { instant(self) } {
                     let k = (dt_learn / self.cfg.learn_tau_s).min(T::one());
                     self.nominal_bias += f * k;
                 }
@@ -64,12 +69,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                     .iter()
                     .all(|t| t.abs() < self.t_threshold() * T::lit(0.5));
                 let estimate = if quiet && !held { instant(self) } else { None };
-                if let Some(mut f) = estimate {
-                    if self.heading_on() && self.heading.contaminated {
-                        for v in f.iter_mut().take(2) {
-                            *v = T::zero();
-                        }
-                    }
+                if let Some(f) = estimate {
                     let k = dt_learn / self.cfg.drift_tau_s;
                     for ((b, df), lim) in self
                         .nominal_bias
