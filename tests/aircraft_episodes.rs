@@ -433,3 +433,42 @@ fn aircraft_heading_offset() {
     assert_eq!(t.detected, t.episodes);
     assert_eq!(t.post_clear_events, 0);
 }
+
+/// Seeds from `IMU_FDI_SEEDS` (`first..end`, default `900..920`): the
+/// campaign on any seeds a user picks, so the figures are not those of the
+/// seeds the tuning saw.
+fn seeds_from_env() -> std::ops::Range<u64> {
+    let text = std::env::var("IMU_FDI_SEEDS").unwrap_or_else(|_| "900..920".into());
+    let (a, b) = text
+        .split_once("..")
+        .expect("IMU_FDI_SEEDS is first..end, e.g. 900..920");
+    let (a, b): (u64, u64) = (a.trim().parse().unwrap(), b.trim().parse().unwrap());
+    assert!(a < b, "IMU_FDI_SEEDS: empty range {text}");
+    a..b
+}
+
+/// GIVEN seeds of the user's choosing (`IMU_FDI_SEEDS=first..end`), WHEN
+/// the aircraft and AUV campaigns run on them (episodes on every seed, one
+/// fault-free aircraft hour per seed), THEN the targets hold:
+/// `IMU_FDI_SEEDS=900..920 cargo test --release --test aircraft_episodes
+/// any_seeds -- --ignored --nocapture`.
+#[test]
+#[ignore = "seeds from IMU_FDI_SEEDS: run with --release -- --ignored"]
+fn any_seeds() {
+    let seeds = seeds_from_env();
+    let name = format!("seeds {}-{}", seeds.start, seeds.end - 1);
+    assert_targets(
+        &format!("aircraft, {name}"),
+        &episodes(&Scenario::aircraft_fault_free(0.0), seeds.clone()),
+    );
+    let t = episodes(&Scenario::auv_fault_free(0.0), seeds.clone());
+    assert_targets(&format!("AUV, {name}"), &t);
+    assert_eq!(t.detected, t.episodes);
+    let m = fault_free(&Scenario::aircraft_fault_free(3600.0), seeds);
+    println!(
+        "aircraft, fault-free, {name}: {} false-alarm events in {:.2} h",
+        m.false_alarm_events,
+        m.free_time_s / 3600.0
+    );
+    assert_eq!(m.false_alarm_events, 0);
+}
