@@ -13,12 +13,19 @@ pub(crate) struct Args {
     /// gyro, accel or both.
     #[arg(long, default_value = "both")]
     kind: String,
-    /// Fault-free hours (one-hour flights, seeds 1000…).
+    /// Fault-free hours (one-hour flights, seeds from `--fault-free-seed`).
     #[arg(long, default_value_t = 10)]
     hours: u32,
     /// Rounds of steps per size (18 flights each: IMU × axis × sign).
     #[arg(long, default_value_t = 2)]
     rounds: u64,
+    /// First seed of the fault-free flights (one per hour): pick others to
+    /// see the figures on flights the tuning never saw.
+    #[arg(long, default_value_t = 1000)]
+    fault_free_seed: u64,
+    /// First seed of the step flights (one per case).
+    #[arg(long, default_value_t = 1)]
+    step_seed: u64,
     /// Log the IMUs integrated over each interval (delta angle / delta
     /// velocity, as a FIFO driver hands them) instead of point-sampled.
     #[arg(long)]
@@ -44,7 +51,7 @@ pub(crate) fn run(a: Args) -> Result<()> {
     };
     let mut kinds_json = Vec::new();
     for &kind in kinds {
-        let ff = fault_free_on(&profile, kind, a.hours, 1000)?;
+        let ff = fault_free_on(&profile, kind, a.hours, a.fault_free_seed)?;
         let mut steps_json = Vec::new();
         if !a.json {
             out!(
@@ -69,7 +76,7 @@ pub(crate) fn run(a: Args) -> Result<()> {
                 ArrayKind::Gyro => s.to_radians(),
                 ArrayKind::Accel => s,
             };
-            let r = steps_on(&profile, kind, si, a.rounds, 1)?;
+            let r = steps_on(&profile, kind, si, a.rounds, a.step_seed)?;
             let med = r.delays.get(r.delays.len() / 2).copied();
             steps_json.push(serde_json::json!({
                 format!("size_{}", if unit == "°/s" { "deg_s" } else { "m_s2" }): s,
