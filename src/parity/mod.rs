@@ -22,6 +22,7 @@ mod geometry;
 mod health;
 mod monitor;
 mod multiscale;
+mod rest;
 mod space;
 mod training;
 mod validate;
@@ -33,6 +34,7 @@ pub use monitor::{reconfig_steps, DetectorFlags, ParityMonitor, ParityPhase, Par
 pub use multiscale::{
     BlockStage, MultiscaleConfig, MultiscaleDecision, REGRESSORS, SCALES, STAGES,
 };
+pub use rest::{RestCheck, RestConfig, RestReport, RestState, MIN_REST_BLOCKS};
 pub use space::ParitySpace;
 pub use training::{Baseline, Trainer};
 

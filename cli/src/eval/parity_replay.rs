@@ -7,7 +7,10 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 use nalgebra::Matrix3;
 
-use imu_fdi::parity::{Geometry, ParityConfig, ParityMonitor, ParityReport, Reading, SensorStatus};
+use imu_fdi::parity::{
+    Geometry, ParityConfig, ParityMonitor, ParityReport, Reading, RestCheck, RestConfig, RestState,
+    SensorStatus,
+};
 
 use hal_sim::array::ArrayKind;
 use hal_sim::baseline::{ArduPilotLike, Px4Like};
@@ -139,6 +142,9 @@ pub struct ParityReplay {
     /// Whether a bias present since power-up is judged
     /// ([`ParityConfig::judges_power_up_offsets`]).
     pub power_up_judged: bool,
+    /// The rest check (gyros) found two or more gyros beyond the offset
+    /// limit at rest: it could not judge, and named none.
+    pub rest_common_mode: bool,
     /// Threshold factors `[GLT, PCA, CUSUM]` set by calibration.
     pub threshold_scales: [f64; 3],
     /// Training's correlation factor (block variance ÷ white-noise value).
@@ -298,6 +304,19 @@ pub fn replay_parity_observed(
         .map_err(|e| anyhow::anyhow!("{e:?}"))?;
     let mut monitor =
         ParityMonitor::<f32, 9, 40>::new(&geometry, cfg).map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    // Gyro biases judged at rest (absolute means while the board is still):
+    // the gyro monitor of a real flight, whose offset limit it shares.
+    let mut rest = match (kind, method) {
+        (ArrayKind::Gyro, ParityMethod::Flight) => Some(
+            RestCheck::<f32, 9>::new(
+                &geometry,
+                &geometry,
+                RestConfig::new(rate, cfg.multiscale.offset_limit),
+            )
+            .map_err(|e| anyhow::anyhow!("{e:?}"))?,
+        ),
+        _ => None,
+    };
     let mut px4 = Px4Like::<3>::new(kind == ArrayKind::Gyro);
     let mut ap = ArduPilotLike::new(kind == ArrayKind::Gyro);
     let mut out = ParityReplay {
@@ -332,6 +351,20 @@ pub fn replay_parity_observed(
                 Reading::Sample(v as f32)
             }
         });
+        if let Some(rest) = rest.as_mut() {
+            let accel: [Reading<f32>; 9] =
+                core::array::from_fn(|i| match row.get(i / 3).and_then(|r| r.get(i % 3)) {
+                    Some(v) if !v.is_nan() => Reading::Sample(*v as f32),
+                    _ => Reading::Missing,
+                });
+            let verdict = rest.step(&readings, &accel, monitor.space().active());
+            if let Some(k) = verdict.isolate.filter(|k| monitor.isolate_external(*k)) {
+                out.isolations.push((k, *t));
+            }
+            if verdict.state == RestState::CommonMode && !out.rest_common_mode {
+                out.rest_common_mode = true;
+            }
+        }
         let r = monitor.step(&readings);
         if out.monitoring_from.is_none() && r.phase == imu_fdi::parity::ParityPhase::Monitoring {
             out.monitoring_from = Some(*t);

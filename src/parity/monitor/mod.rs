@@ -15,6 +15,7 @@ use super::{ConfigError, Geometry, ParitySpace};
 pub use reconfig::reconfig_steps;
 
 mod build;
+mod external;
 mod flight;
 mod fusion;
 mod reconfig;
