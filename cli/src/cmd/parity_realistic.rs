@@ -55,7 +55,7 @@ pub(crate) fn run(a: Args) -> Result<()> {
         let mut steps_json = Vec::new();
         if !a.json {
             out!(
-                "{}: {:.2} h fault-free: {} alarm events ({:.2}/h), {} sensors isolated",
+                "{}: {:.2} h fault-free: {} alarm events ({:.2}/h), {} sensors isolated{}",
                 if kind == ArrayKind::Gyro {
                     "gyro"
                 } else {
@@ -64,7 +64,12 @@ pub(crate) fn run(a: Args) -> Result<()> {
                 ff.hours,
                 ff.alarm_events,
                 ff.alarm_events as f64 / ff.hours.max(1e-9),
-                ff.isolations
+                ff.isolations,
+                if kind == ArrayKind::Gyro {
+                    format!(", {:.1} s judged at rest", ff.at_rest_s)
+                } else {
+                    String::new()
+                }
             );
         }
         let (unit, sizes): (&str, &[f64]) = match kind {
@@ -103,6 +108,7 @@ pub(crate) fn run(a: Args) -> Result<()> {
             "fault_free_alarm_events": ff.alarm_events,
             "fault_free_alarms_per_hour": ff.alarm_events as f64 / ff.hours.max(1e-9),
             "fault_free_isolations": ff.isolations,
+            "fault_free_at_rest_s": ff.at_rest_s,
             "steps": steps_json,
         }));
     }

@@ -8,7 +8,9 @@ use anyhow::{anyhow, Result};
 use nalgebra::Matrix3;
 use rayon::prelude::*;
 
-use imu_fdi::parity::{Geometry, ParityConfig, ParityMonitor, ParityPhase};
+use imu_fdi::parity::{
+    Geometry, ParityConfig, ParityMonitor, ParityPhase, RestCheck, RestConfig, RestState,
+};
 
 use hal_sim::array::ArrayKind;
 use hal_sim::realistic::{ChannelFault, RealisticArray, RealisticProfile};
@@ -27,6 +29,9 @@ pub struct FaultFree {
     pub alarm_events: usize,
     /// Sensors isolated (all healthy here).
     pub isolations: usize,
+    /// Seconds the gyro rest check judged the vehicle at rest (the
+    /// realistic profile flies throughout: any is a false rest).
+    pub at_rest_s: f64,
 }
 
 /// What the steps of one size produced.
@@ -50,9 +55,9 @@ fn config(kind: ArrayKind, rate: f64) -> ParityConfig<f32> {
     }
 }
 
-/// Alarm start times, isolations `(sensor, t)` and monitored seconds of
-/// one flight.
-type Flight = (Vec<f64>, Vec<(usize, f64)>, f64);
+/// Alarm start times, isolations `(sensor, t)`, monitored seconds and
+/// seconds judged at rest of one flight.
+type Flight = (Vec<f64>, Vec<(usize, f64)>, f64, f64);
 
 /// One flight through the monitor: alarm starts after monitoring began,
 /// isolations `(sensor, t)`, monitored seconds.
@@ -72,10 +77,33 @@ fn run(
     if let Some(f) = fault {
         sim = sim.with_fault(f);
     }
+    // The gyros' rest check, as `parity-replay` runs it.
+    let mut rest = match kind {
+        ArrayKind::Gyro => Some(
+            RestCheck::<f32, 9>::new(
+                &geometry,
+                &geometry,
+                RestConfig::new(profile.log_hz, cfg.multiscale.offset_limit),
+            )
+            .map_err(|e| anyhow!("rest check: {e:?}"))?,
+        ),
+        ArrayKind::Accel => None,
+    };
+    let mut at_rest = 0usize;
     let (mut alarms, mut isolations) = (Vec::new(), Vec::new());
     let (mut was, mut from, mut last) = (false, None, 0.0);
     for row in sim {
         let readings = row.readings(kind).map(|r| r.map(|v| v as f32));
+        if let Some(rest) = rest.as_mut() {
+            let accel = row.readings(ArrayKind::Accel).map(|r| r.map(|v| v as f32));
+            let verdict = rest.step(&readings, &accel, monitor.space().active());
+            if verdict.state != RestState::Moving {
+                at_rest += 1;
+            }
+            if let Some(k) = verdict.isolate.filter(|k| monitor.isolate_external(*k)) {
+                isolations.push((k, row.t));
+            }
+        }
         let r = monitor.step(&readings);
         last = row.t;
         if from.is_none() && r.phase == ParityPhase::Monitoring {
@@ -89,7 +117,8 @@ fn run(
             isolations.push((k, row.t));
         }
     }
-    Ok((alarms, isolations, from.map_or(0.0, |f| last - f)))
+    let rest_s = at_rest as f64 / profile.log_hz;
+    Ok((alarms, isolations, from.map_or(0.0, |f| last - f), rest_s))
 }
 
 /// `hours` of fault-free realistic flight, split into one-hour flights
@@ -113,10 +142,11 @@ pub fn fault_free_on(
         .collect::<Result<_>>()?;
     Ok(runs
         .iter()
-        .fold(FaultFree::default(), |acc, (a, iso, s)| FaultFree {
+        .fold(FaultFree::default(), |acc, (a, iso, s, r)| FaultFree {
             hours: acc.hours + s / 3600.0,
             alarm_events: acc.alarm_events + a.len(),
             isolations: acc.isolations + iso.len(),
+            at_rest_s: acc.at_rest_s + r,
         }))
 }
 
@@ -160,7 +190,7 @@ pub fn steps_on(
         .par_iter()
         .map(|&(sd, imu, axis, sign)| {
             let fault = ChannelFault::bias(imu, channel0 + axis, onset, onset + 15.0, sign * size);
-            let (alarms, iso, _) = run(kind, &profile, sd, Some(fault))?;
+            let (alarms, iso, _, _) = run(kind, &profile, sd, Some(fault))?;
             let sensor = 3 * imu + axis;
             let hit = iso
                 .iter()
