@@ -160,7 +160,10 @@ pub struct RestCheck<T: Real, const N: usize> {
     n: u16,
     /// Still blocks in a row.
     run: u16,
-    /// Sums of the used still blocks' gyro means and their squares.
+    /// Sums of the used still blocks' gyro means and their squares,
+    /// centred on the run's first used block (so the `f32` variance is not
+    /// the difference of two large numbers when a bias is large).
+    centre: Option<SVector<T, N>>,
     sum: SVector<T, N>,
     sum2: SVector<T, N>,
     blocks: u16,
@@ -210,6 +213,7 @@ impl<T: Real, const N: usize> RestCheck<T, N> {
             ass: SVector::zeros(),
             n: 0,
             run: 0,
+            centre: None,
             sum: SVector::zeros(),
             sum2: SVector::zeros(),
             blocks: 0,
@@ -280,6 +284,7 @@ impl<T: Real, const N: usize> RestCheck<T, N> {
         self.ass = SVector::zeros();
         self.n = 0;
         self.run = 0;
+        self.centre = None;
         self.sum = SVector::zeros();
         self.sum2 = SVector::zeros();
         self.blocks = 0;
@@ -319,9 +324,14 @@ impl<T: Real, const N: usize> RestCheck<T, N> {
             self.state = RestState::Moving;
             return None;
         }
-        self.sum += g_mean;
-        self.sum2 += g_mean.component_mul(&g_mean);
-        self.blocks = self.blocks.saturating_add(1);
+        // The count saturates after 4.5 h of rest at 0.25-s blocks: the
+        // sums stop with it, so the mean stays that of the counted blocks.
+        if self.blocks < u16::MAX {
+            let d = g_mean - *self.centre.get_or_insert(g_mean);
+            self.sum += d;
+            self.sum2 += d.component_mul(&d);
+            self.blocks += 1;
+        }
         self.state = self.verdict(active);
         let RestState::Biased(k) = self.state else {
             self.votes = (None, 0);
@@ -346,19 +356,22 @@ impl<T: Real, const N: usize> RestCheck<T, N> {
         let nb = T::lit(f64::from(self.blocks));
         let t = student_t_cornish_fisher(self.z, nb - T::one());
         let limit = self.cfg.offset_limit;
+        let centre = self.centre.unwrap_or_else(SVector::zeros);
         let (mut above, mut unsure, mut who) = (0usize, 0usize, None);
-        for (k, ((s, s2), a)) in self
+        for (k, (((s, s2), c), a)) in self
             .sum
             .iter()
             .zip(self.sum2.iter())
+            .zip(centre.iter())
             .zip(active.iter())
             .enumerate()
         {
             if !*a {
                 continue;
             }
-            let m = *s / nb;
-            let var = ((*s2 - m * m * nb) / (nb - T::one())).max(T::zero());
+            let d = *s / nb;
+            let var = ((*s2 - d * d * nb) / (nb - T::one())).max(T::zero());
+            let m = *c + d;
             let margin = t * (var / nb).sqrt();
             if m.abs() - margin > limit {
                 above += 1;

@@ -177,6 +177,9 @@ pub(crate) fn parity_replay_cmd(
             // was already faulty when training began.
             out!("  a bias present since power-up is not judged (learned as the sensor's turn-on offset)");
         }
+        if r.rest_common_mode {
+            out!("  at rest, two or more gyros beyond the offset limit: not judged, none named (a steady turn, or several faulty gyros)");
+        }
         out!("  parity alarms: {}", fmt(&r.alarms));
         let iso: Vec<String> = r
             .isolations
