@@ -31,8 +31,9 @@
 //!    n − 1) at [`false_alarm`](RestConfig::false_alarm), so a healthy
 //!    gyro whose bias is within the limit is called above with at most
 //!    that probability per decision.
-//! 3. **Verdict**: exactly one sensor above and every other active one
-//!    within → that sensor is biased; after `confirm` such decisions in a
+//! 3. **Verdict**: exactly one sensor above, every other active one
+//!    within, and its mean more than the limit (beyond both margins) from
+//!    every other gyro of its direction → that sensor is biased; after `confirm` such decisions in a
 //!    row it is named for isolation ([`RestReport::isolate`]). Two or more
 //!    above → [`RestState::CommonMode`]: the board is turning steadily or
 //!    several sensors are off — it cannot judge and names none.
@@ -47,8 +48,10 @@
 //!
 //! Limits: a steady yaw turn without vibration (a turntable) looks like
 //! rest to both sensor kinds; its rate shows on every gyro of that axis
-//! (common mode), so only a turn rate within a healthy bias of the limit
-//! could name a sensor.
+//! (common mode). At a turn rate near the limit one healthy gyro can read
+//! above it and the others within; the named sensor must also stand the
+//! limit clear of the others, which a turn's gyros, agreeing to within
+//! their healthy biases, do not.
 
 use nalgebra::SVector;
 
@@ -358,12 +361,15 @@ impl<T: Real, const N: usize> RestCheck<T, N> {
         let limit = self.cfg.offset_limit;
         let centre = self.centre.unwrap_or_else(SVector::zeros);
         let (mut above, mut unsure, mut who) = (0usize, 0usize, None);
-        for (k, (((s, s2), c), a)) in self
+        let mut means = [T::zero(); N];
+        let mut margins = [T::zero(); N];
+        for (k, ((((s, s2), c), a), (mk, gk))) in self
             .sum
             .iter()
             .zip(self.sum2.iter())
             .zip(centre.iter())
             .zip(active.iter())
+            .zip(means.iter_mut().zip(margins.iter_mut()))
             .enumerate()
         {
             if !*a {
@@ -373,6 +379,7 @@ impl<T: Real, const N: usize> RestCheck<T, N> {
             let var = ((*s2 - d * d * nb) / (nb - T::one())).max(T::zero());
             let m = *c + d;
             let margin = t * (var / nb).sqrt();
+            (*mk, *gk) = (m, margin);
             if m.abs() - margin > limit {
                 above += 1;
                 who = Some(k);
@@ -382,10 +389,30 @@ impl<T: Real, const N: usize> RestCheck<T, N> {
         }
         match (above, unsure, who) {
             (0, 0, _) => RestState::WithinLimit,
-            (1, 0, Some(k)) => RestState::Biased(k),
+            (1, 0, Some(k)) if self.stands_out(k, &means, &margins, active) => RestState::Biased(k),
+            (1, 0, Some(_)) => RestState::CommonMode,
             (a, _, _) if a >= 2 => RestState::CommonMode,
             _ => RestState::Judging,
         }
+    }
+
+    /// Sensor `k`'s mean differs from every other active gyro sharing its
+    /// direction by more than the limit (beyond both margins). A steady
+    /// turn at a rate near the limit puts one healthy gyro just above it
+    /// and the others just within; their means then agree, and a turn is
+    /// no bias of one sensor.
+    fn stands_out(&self, k: usize, means: &[T; N], margins: &[T; N], active: &[bool; N]) -> bool {
+        let (Some(gk), Some(mk), Some(ek)) = (self.gyro_group.get(k), means.get(k), margins.get(k))
+        else {
+            return false;
+        };
+        self.gyro_group
+            .iter()
+            .zip(means.iter().zip(margins.iter()))
+            .zip(active.iter())
+            .enumerate()
+            .filter(|(j, ((g, _), a))| *j != k && *g == gk && **a)
+            .all(|(_, ((_, (m, e)), _))| (*mk - *m).abs() - (*ek + *e) > self.cfg.offset_limit)
     }
 }
 
