@@ -30,6 +30,12 @@ pub(crate) struct Args {
     /// velocity, as a FIFO driver hands them) instead of point-sampled.
     #[arg(long)]
     integrated: bool,
+    /// Also print each fault-free alarm event (text only): when, on which
+    /// window length, the suspect and its estimated bias, what was
+    /// isolated, and how far the suspect's simulated bias had really
+    /// drifted from its mean over the 2 minutes before.
+    #[arg(long)]
+    events: bool,
     /// One JSON object on stdout instead of text (docs/cli-json.md).
     #[arg(long)]
     json: bool,
@@ -71,6 +77,24 @@ pub(crate) fn run(a: Args) -> Result<()> {
                     String::new()
                 }
             );
+            if a.events {
+                for e in &ff.events {
+                    out!(
+                        "  seed {} t {:.0} s ({:.0} s monitored): {:.2}× threshold on the {:.1}-s window, sensor {} bias {:+.3} {}, isolated {}; its simulated bias drifted {:+.3} {}",
+                        e.seed,
+                        e.t,
+                        e.since_monitoring,
+                        e.ratio,
+                        e.window_s,
+                        e.suspect,
+                        e.bias,
+                        if kind == ArrayKind::Gyro { "°/s" } else { "m/s²" },
+                        e.isolated.map_or("none".into(), |k| k.to_string()),
+                        e.true_drift,
+                        if kind == ArrayKind::Gyro { "°/s" } else { "m/s²" },
+                    );
+                }
+            }
         }
         let (unit, sizes): (&str, &[f64]) = match kind {
             ArrayKind::Gyro => ("°/s", &[0.5, 1.0, 2.0, 3.0]),

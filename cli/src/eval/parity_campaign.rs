@@ -21,7 +21,7 @@ pub const TRAIN_S: f64 = 30.0;
 pub const ISOLATE_WITHIN_S: f64 = 10.0;
 
 /// What a fault-free realistic flight produced.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct FaultFree {
     /// Monitored hours.
     pub hours: f64,
@@ -32,6 +32,8 @@ pub struct FaultFree {
     /// Seconds the gyro rest check judged the vehicle at rest (the
     /// realistic profile flies throughout: any is a false rest).
     pub at_rest_s: f64,
+    /// The alarm events, flight by flight.
+    pub events: Vec<AlarmEvent>,
 }
 
 /// What the steps of one size produced.
@@ -55,9 +57,55 @@ fn config(kind: ArrayKind, rate: f64) -> ParityConfig<f32> {
     }
 }
 
-/// Alarm start times, isolations `(sensor, t)`, monitored seconds and
-/// seconds judged at rest of one flight.
-type Flight = (Vec<f64>, Vec<(usize, f64)>, f64, f64);
+/// One alarm event of a flight, with what the monitor saw and what the
+/// simulation knows.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AlarmEvent {
+    /// Seed of the flight.
+    pub seed: u64,
+    /// Rising edge of the fault flag, s of flight.
+    pub t: f64,
+    /// Seconds since monitoring began.
+    pub since_monitoring: f64,
+    /// Largest score ÷ threshold while the alarm held.
+    pub ratio: f64,
+    /// Window length of that score, s.
+    pub window_s: f64,
+    /// Sensor whose bias hypothesis explained that window best.
+    pub suspect: usize,
+    /// Its estimated bias (°/s or m/s²).
+    pub bias: f64,
+    /// First sensor isolated while the alarm held, if any.
+    pub isolated: Option<usize>,
+    /// The suspect's simulated relative bias (its bias-instability state and
+    /// thermal drift minus the mean of the other two IMUs') at that score,
+    /// minus its mean over the 2 minutes before (the calibration's
+    /// memory), °/s or m/s²: how far the healthy sensor had really drifted.
+    pub true_drift: f64,
+}
+
+/// Alarm start times, isolations `(sensor, t)`, monitored seconds, seconds
+/// judged at rest and the alarm events of one flight.
+type Flight = (Vec<f64>, Vec<(usize, f64)>, f64, f64, Vec<AlarmEvent>);
+
+/// Seconds of simulated truth kept for [`AlarmEvent::true_drift`].
+const TRUTH_MEMORY_S: f64 = 120.0;
+
+/// Each sensor's simulated relative bias (its IMU minus the mean of the
+/// other two), in °/s or m/s², sensor `3·IMU + axis`.
+fn relative_biases(sim: &RealisticArray, kind: ArrayKind) -> [f64; 9] {
+    let b = sim.biases();
+    let (first, unit) = match kind {
+        ArrayKind::Gyro => (3, 1f64.to_radians()),
+        ArrayKind::Accel => (0, 1.0),
+    };
+    core::array::from_fn(|s| {
+        let (imu, ch) = (s / 3, first + s % 3);
+        let at = |i: usize| b.get(i).and_then(|c| c.get(ch)).copied().unwrap_or(0.0);
+        let others = (0..3).filter(|&i| i != imu).map(at).sum::<f64>() / 2.0;
+        (at(imu) - others) / unit
+    })
+}
 
 /// One flight through the monitor: alarm starts after monitoring began,
 /// isolations `(sensor, t)`, monitored seconds.
@@ -90,9 +138,16 @@ fn run(
         ArrayKind::Accel => None,
     };
     let mut at_rest = 0usize;
-    let (mut alarms, mut isolations) = (Vec::new(), Vec::new());
+    let unit = match kind {
+        ArrayKind::Gyro => 1f64.to_radians(),
+        ArrayKind::Accel => 1.0,
+    };
+    let block_s = f64::from(cfg.block_len) / profile.log_hz;
+    let (mut alarms, mut isolations, mut events) = (Vec::new(), Vec::new(), Vec::new());
+    let mut truth: std::collections::VecDeque<(f64, [f64; 9])> = Default::default();
+    let mut open: Option<AlarmEvent> = None;
     let (mut was, mut from, mut last) = (false, None, 0.0);
-    for row in sim {
+    while let Some(row) = sim.next() {
         let readings = row.readings(kind).map(|r| r.map(|v| v as f32));
         if let Some(rest) = rest.as_mut() {
             let accel = row.readings(ArrayKind::Accel).map(|r| r.map(|v| v as f32));
@@ -106,19 +161,66 @@ fn run(
         }
         let r = monitor.step(&readings);
         last = row.t;
+        truth.push_back((row.t, relative_biases(&sim, kind)));
+        while truth
+            .front()
+            .is_some_and(|(t, _)| *t < row.t - TRUTH_MEMORY_S)
+        {
+            truth.pop_front();
+        }
         if from.is_none() && r.phase == ParityPhase::Monitoring {
             from = Some(row.t);
         }
-        if from.is_some() && r.fault && !was {
+        if let (Some(f), true, false) = (from, r.fault, was) {
             alarms.push(row.t);
+            if let Some(e) = open.take() {
+                events.push(e);
+            }
+            open = Some(AlarmEvent {
+                seed,
+                t: row.t,
+                since_monitoring: row.t - f,
+                ..AlarmEvent::default()
+            });
         }
         was = r.fault;
         if let Some(k) = r.isolated {
             isolations.push((k, row.t));
         }
+        if let Some(e) = open.as_mut() {
+            let m = r.multiscale;
+            if r.fault && f64::from(m.ratio) > e.ratio {
+                let k = m.suspect.unwrap_or(0);
+                let rel = |x: &[f64; 9]| x.get(k).copied().unwrap_or(0.0);
+                let past: Vec<f64> = truth.iter().map(|(_, x)| rel(x)).collect();
+                let mean = past.iter().sum::<f64>() / past.len().max(1) as f64;
+                e.ratio = f64::from(m.ratio);
+                e.window_s = cfg
+                    .multiscale
+                    .scales
+                    .get(m.scale)
+                    .map_or(0.0, |&n| f64::from(n) * block_s);
+                e.suspect = k;
+                e.bias = f64::from(m.bias) / unit;
+                e.true_drift = truth.back().map_or(0.0, |(_, x)| rel(x)) - mean;
+            }
+            if e.isolated.is_none() {
+                e.isolated = r.isolated;
+            }
+            if !r.fault {
+                events.extend(open.take());
+            }
+        }
     }
+    events.extend(open);
     let rest_s = at_rest as f64 / profile.log_hz;
-    Ok((alarms, isolations, from.map_or(0.0, |f| last - f), rest_s))
+    Ok((
+        alarms,
+        isolations,
+        from.map_or(0.0, |f| last - f),
+        rest_s,
+        events,
+    ))
 }
 
 /// `hours` of fault-free realistic flight, split into one-hour flights
@@ -142,11 +244,13 @@ pub fn fault_free_on(
         .collect::<Result<_>>()?;
     Ok(runs
         .iter()
-        .fold(FaultFree::default(), |acc, (a, iso, s, r)| FaultFree {
-            hours: acc.hours + s / 3600.0,
-            alarm_events: acc.alarm_events + a.len(),
-            isolations: acc.isolations + iso.len(),
-            at_rest_s: acc.at_rest_s + r,
+        .fold(FaultFree::default(), |mut acc, (a, iso, s, r, ev)| {
+            acc.hours += s / 3600.0;
+            acc.alarm_events += a.len();
+            acc.isolations += iso.len();
+            acc.at_rest_s += r;
+            acc.events.extend_from_slice(ev);
+            acc
         }))
 }
 
@@ -190,7 +294,7 @@ pub fn steps_on(
         .par_iter()
         .map(|&(sd, imu, axis, sign)| {
             let fault = ChannelFault::bias(imu, channel0 + axis, onset, onset + 15.0, sign * size);
-            let (alarms, iso, _, _) = run(kind, &profile, sd, Some(fault))?;
+            let (alarms, iso, _, _, _) = run(kind, &profile, sd, Some(fault))?;
             let sensor = 3 * imu + axis;
             let hit = iso
                 .iter()
