@@ -2,7 +2,7 @@
 //! profile, learning, aiding noise and latencies, the monitor.
 
 use imu_fdi::model::MeasVec;
-use imu_fdi::monitor::UkfMonitorConfig;
+use imu_fdi::monitor::{AttitudeRateConfig, UkfMonitorConfig};
 
 use super::replay_monitor::MonitorKind;
 
@@ -125,5 +125,9 @@ pub fn flight_config(
     c.max_innovation_inflation = opts.max_inflation.unwrap_or(25.0);
     // The tracking fault estimate (the window mean lags and is noisy).
     c.fault_psd = Some(UkfMonitorConfig::fault_tracking_psd());
+    // Small gyro biases against an autopilot's wandering attitude: the gyro
+    // against the attitude aiding over windows of seconds, their spread
+    // learnt on this flight (issue 15).
+    c.attitude_rate = Some(AttitudeRateConfig::flight());
     c
 }

@@ -1,0 +1,1045 @@
+//! The gyro/attitude-aiding consistency test (issue 15,
+//! `UkfMonitorConfig::attitude_rate`).
+//!
+//! **Why.** The ten-epoch innovation windows see a gyro bias `b` only
+//! through the attitude innovations, whose per-epoch SNR is about
+//! `b / σ` with σ the aliased vibration of one IMU sample (6–12 °/s on
+//! log171): a 2 °/s step needs 5–10 s of evidence, which a 1-s window and
+//! a learnt inflation built for it never collect. This test compares the
+//! gyro with the attitude aiding directly, over seconds.
+//!
+//! **Residual.** Between two attitude-aiding epochs the raw gyro is
+//! integrated as a quaternion, one exact rotation `exp(ω·dt)` per IMU
+//! sample (rates reach 200 °/s in Acro: no small-angle shortcut across an
+//! interval), giving the body rotation `ΔR_g`; the aiding gives
+//! `ΔR_a = R_a(t₀)ᵀ R_a(t₁)`. The residual `log(ΔR_aᵀ ΔR_g)` (body axes,
+//! logarithm by `atan2`, exact in `f32` for small angles), mapped by the
+//! inverse right Jacobian of the gyro's rotation, is `b·Δt` to first order
+//! in `b` at any rate, plus the aiding's error at `t₁` minus that at `t₀`. Summed
+//! over a block or a window the aiding errors telescope (only the ends
+//! remain) while a bias adds up, so the window mean is `b` plus the
+//! gyro's own noise and `(e(t) − e(t−T))/T`. A constant heading offset of
+//! the aiding cancels exactly in `ΔR_a`; a constant aiding lag leaves
+//! only end terms, learnt with the variance. The raw gyro is used, not
+//! the nominal-bias-corrected one, so that the UKF's drift tracker (gated
+//! by the UKF's own test) cannot absorb a slow fault this test sees; the
+//! offset is learnt here instead.
+//!
+//! **Blocks and windows.** Residuals are summed over blocks of `block_s`
+//! (`Σ residual / Σ Δt`, rad/s); windows of `lengths` blocks slide by one
+//! block and are judged at each block's end. An epoch whose attitude the
+//! UKF did not fuse (its gate rejected it) is skipped and the gyro
+//! integrated on to the next one; an interval longer than
+//! `aiding_timeout_s`, an invalid IMU sample or held statistics drop the
+//! interval.
+//!
+//! **What is learnt, and why it gives the false-alarm rate.** Per gyro
+//! channel, from the start of the UKF's learning phase and on while
+//! monitoring: the offset (mean block, the gyro's turn-on bias against the
+//! aiding; clamped to `max_nominal_bias`, or 20 × `min_fault` as the
+//! nominal-bias learner, so a larger power-up bias is reported), the block
+//! variance `v_B` and each length's reddening factor `ρ_L`, the window
+//! variance over `v_B / L`. A 10-s window variance cannot be learnt from
+//! 20–70 s of flight alone (2–7 independent windows), while `v_B` has
+//! 40–140 blocks: `ρ_L` is therefore a posterior with a white-noise prior
+//! (`ρ = 1`) worth `prior_windows` windows, updated by the window means
+//! the flight has shown, each overlapping window counting `1.5/L`
+//! independent ones (the degrees of freedom of the overlapping-batch-means
+//! variance estimator, Meketon & Schmeiser 1984). On log171 the factors
+//! come out 0.5–1.3 (the aiding's errors telescope: better than white on
+//! roll and pitch; the yaw aiding is slightly red). The window mean's
+//! variance is `v_B·ρ_L·(1/L + 1/N)` (`N` blocks in the offset), and the
+//! threshold the Student-t quantile of the per-decision probability
+//! [`AttitudeRateConfig::alpha`] at the degrees of freedom
+//! `prior_windows + 1.5·n_L/L` actually learnt: the false-alarm rate
+//! follows from the data and the design rate, not from a margin. A length
+//! judges once it has `min_dof` degrees of freedom and the offset two
+//! longest windows of blocks.
+//!
+//! **No learning during a fault.** A block is learnt (offset, `v_B`, and
+//! the windows that end at it) only once every decision that saw it has
+//! been made, and only on the channels where all of those stayed below
+//! `learn_below` of the threshold and no channel of the UKF was flagged.
+//!
+//! **Decisions.** The largest score/threshold ratio over the lengths, with
+//! its sign; `confirm` consecutive ratios above 1 with one sign flag the
+//! channel, with the window mean (less the offset) as its size. The flag
+//! holds for `lengths[0]` blocks after the last confirmed decision and then
+//! clears: the way back to nominal is the windows no longer holding the
+//! fault (at most the longest window plus the hold after it ends; never
+//! stuck, since the offset is not learnt meanwhile). A flag is merged into
+//! the UKF's report only on a gyro channel the UKF judges healthy; before
+//! this test can judge it changes nothing (the UKF's test still decides,
+//! and `NotMonitored` stays so).
+
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+
+use super::{UkfMonitor, MAX_NOMINAL_BIAS_FACTOR};
+use crate::math::Real;
+use crate::model::{ImuVec, Measurement};
+use crate::monitor::{
+    AttitudeRateConfig, AttitudeRateDetail, ChannelState, ATTITUDE_RATE_LENGTHS as NL,
+    ATTITUDE_RATE_MAX_BLOCKS,
+};
+use crate::stats::student_t_upper_quantile;
+
+/// Block means kept: a block is learnt once every decision that saw it
+/// has been made (ages up to two longest windows).
+const RING: usize = 2 * ATTITUDE_RATE_MAX_BLOCKS;
+/// Independent windows an overlapping window counts, times its length.
+const OBM_DOF: f64 = 1.5;
+/// Ratio recorded for a block during which the UKF flagged a channel: no
+/// learning from it.
+const EXTERNAL_FLAG_RATIO: f64 = 1e3;
+
+/// `log(q)` as a rotation vector, by `atan2` (no `acos` near 1, which
+/// loses half the digits of a small angle in `f32`).
+pub(crate) fn rotation_log<T: Real>(q: &UnitQuaternion<T>) -> Vector3<T> {
+    let q = q.quaternion();
+    // q and −q are the same rotation: take the short way.
+    let (w, v) = if q.w < T::zero() {
+        (-q.w, -q.imag())
+    } else {
+        (q.w, q.imag())
+    };
+    let n = v.norm();
+    if n <= T::zero() {
+        return Vector3::zeros();
+    }
+    v * (T::lit(2.0) * n.atan2(w) / n)
+}
+
+/// `exp(θ)` of a rotation vector, exact for any angle.
+pub(crate) fn rotation_exp<T: Real>(theta: &Vector3<T>) -> UnitQuaternion<T> {
+    let a = theta.norm();
+    let (s, c) = (a * T::lit(0.5)).sin_cos_fast();
+    // sin(a/2)/a, by its series where a is tiny.
+    let k = if a > T::lit(1e-4) {
+        s / a
+    } else {
+        T::lit(0.5) - a * a / T::lit(48.0)
+    };
+    UnitQuaternion::new_unchecked(Quaternion::from_parts(c, theta * k))
+}
+
+/// `J_r(φ)⁻¹ v`, the inverse right Jacobian of SO(3): with `ΔR_g =
+/// exp(φ + δ)` (a constant bias `δ/Δt` on a constant rate),
+/// `log(exp(−φ) ΔR_g) = J_r(φ) δ + O(δ²)`, so this maps the residual back
+/// to the bias exactly to first order at any rate (at 200 °/s over 0.1 s
+/// `J_r` turns a bias by 10°).
+pub(crate) fn inverse_right_jacobian<T: Real>(phi: &Vector3<T>, v: &Vector3<T>) -> Vector3<T> {
+    let th2 = phi.norm_squared();
+    // 1/θ² − (1 + cos θ)/(2θ sin θ), by its series below 0.1 rad (the
+    // closed form cancels there).
+    let c = if th2 < T::lit(0.01) {
+        T::lit(1.0 / 12.0) + th2 * (T::lit(1.0 / 720.0) + th2 * T::lit(1.0 / 30_240.0))
+    } else {
+        let th = th2.sqrt_fast();
+        let (s, co) = th.sin_cos_fast();
+        T::one() / th2 - (T::one() + co) / (T::lit(2.0) * th * s)
+    };
+    let pv = phi.cross(v);
+    v + pv * T::lit(0.5) + phi.cross(&pv) * c
+}
+
+/// The body→NED rotation of ZYX Euler angles (roll, pitch, yaw).
+fn from_euler<T: Real>(roll: T, pitch: T, yaw: T) -> UnitQuaternion<T> {
+    let h = T::lit(0.5);
+    let (sr, cr) = (roll * h).sin_cos_fast();
+    let (sp, cp) = (pitch * h).sin_cos_fast();
+    let (sy, cy) = (yaw * h).sin_cos_fast();
+    UnitQuaternion::new_unchecked(Quaternion::new(
+        cr * cp * cy + sr * sp * sy,
+        sr * cp * cy - cr * sp * sy,
+        cr * sp * cy + sr * cp * sy,
+        cr * cp * sy - sr * sp * cy,
+    ))
+}
+
+/// The test's state (see the module notes).
+#[derive(Debug, Clone)]
+pub(super) struct AttitudeRate<T> {
+    /// Per-decision false-alarm probability, two-sided.
+    alpha: f64,
+    /// The gyro rotation since the reference epoch, and its time.
+    gyro: UnitQuaternion<T>,
+    gyro_dt: T,
+    /// The aiding attitude the interval started from.
+    reference: Option<UnitQuaternion<T>>,
+    /// Sum of the residuals and of their intervals in the open block.
+    sum: Vector3<T>,
+    sum_dt: T,
+    /// A channel of the UKF was flagged during the open block.
+    external: bool,
+    /// The last `RING` block means, newest at `head − 1`.
+    blocks: [Vector3<T>; RING],
+    /// The largest score/threshold ratio of each block's decision.
+    ratio_at: [Vector3<T>; RING],
+    head: usize,
+    filled: usize,
+    /// Learnt weight (blocks), sum and sum of squares of the block means.
+    n_b: Vector3<T>,
+    s1: Vector3<T>,
+    s2: Vector3<T>,
+    /// Per length: learnt sum of squared window means (about the offset)
+    /// and their count.
+    q_w: [Vector3<T>; NL],
+    n_w: [Vector3<T>; NL],
+    /// Per length and channel: degrees of freedom and Student-t threshold
+    /// last computed (recomputed when the former moves by 1 %).
+    quantile: [[(T, T); 3]; NL],
+    judging: bool,
+    /// Consecutive decisions above threshold per channel, with their sign.
+    run: [(u8, i8); 3],
+    /// Blocks the flag still holds after the last confirmed decision.
+    hold: [u8; 3],
+    pub(super) detail: AttitudeRateDetail<T>,
+}
+
+impl<T: Real> AttitudeRate<T> {
+    /// An empty test with per-decision probability `alpha`.
+    pub fn new(alpha: f64) -> Self {
+        Self {
+            alpha,
+            gyro: UnitQuaternion::identity(),
+            gyro_dt: T::zero(),
+            reference: None,
+            sum: Vector3::zeros(),
+            sum_dt: T::zero(),
+            external: false,
+            blocks: [Vector3::zeros(); RING],
+            ratio_at: [Vector3::zeros(); RING],
+            head: 0,
+            filled: 0,
+            n_b: Vector3::zeros(),
+            s1: Vector3::zeros(),
+            s2: Vector3::zeros(),
+            q_w: [Vector3::zeros(); NL],
+            n_w: [Vector3::zeros(); NL],
+            quantile: [[(T::zero(), T::zero()); 3]; NL],
+            judging: false,
+            run: [(0, 0); 3],
+            hold: [0; 3],
+            detail: AttitudeRateDetail::default(),
+        }
+    }
+
+    /// Starts afresh (learning restarted).
+    pub fn reset(&mut self) {
+        *self = Self::new(self.alpha);
+    }
+
+    /// Forgets the interval, the open block, the block means and the
+    /// decisions (a re-alignment): what was learnt is kept.
+    pub fn clear_windows(&mut self) {
+        self.invalidate();
+        self.sum = Vector3::zeros();
+        self.sum_dt = T::zero();
+        self.filled = 0;
+        self.run = [(0, 0); 3];
+        self.hold = [0; 3];
+        self.detail.flag = [0; 3];
+        self.detail.estimate = [T::zero(); 3];
+        self.detail.ratio = [T::zero(); 3];
+    }
+
+    /// Decisions start (monitoring).
+    pub fn start_judging(&mut self) {
+        self.judging = true;
+    }
+
+    /// Drops the interval under way: the next attitude epoch only sets the
+    /// reference.
+    pub fn invalidate(&mut self) {
+        self.reference = None;
+        self.gyro = UnitQuaternion::identity();
+        self.gyro_dt = T::zero();
+    }
+
+    /// One IMU sample's rotation.
+    pub fn integrate(&mut self, rate: &Vector3<T>, dt: T) {
+        if self.reference.is_some() {
+            self.gyro *= rotation_exp(&(rate * dt));
+            self.gyro_dt += dt;
+        }
+    }
+
+    /// The largest ratio of the last decision is below `fraction` on every
+    /// channel.
+    pub fn quiet(&self, fraction: T) -> bool {
+        self.detail.ratio.iter().all(|r| *r < fraction)
+    }
+
+    /// An attitude-aiding epoch (ZYX Euler angles of body→NED), closing
+    /// the interval; decides and learns when it closes a block. `bound`:
+    /// the largest offset per gyro channel; `max_interval`: longer
+    /// intervals are dropped; `external`: a UKF channel is flagged.
+    pub fn epoch(
+        &mut self,
+        cfg: &AttitudeRateConfig<T>,
+        euler: [T; 3],
+        bound: &Vector3<T>,
+        max_interval: T,
+        external: bool,
+    ) {
+        let [r, p, y] = euler;
+        let aid = from_euler(r, p, y);
+        self.external |= external;
+        let interval = self.gyro_dt;
+        if let Some(reference) = self.reference {
+            if interval > T::zero() && interval <= max_interval {
+                let d_aid = reference.inverse() * aid;
+                let res = inverse_right_jacobian(
+                    &rotation_log(&self.gyro),
+                    &rotation_log(&(d_aid.inverse() * self.gyro)),
+                );
+                if res.iter().all(|v| v.finite()) {
+                    self.sum += res;
+                    self.sum_dt += interval;
+                }
+            }
+        }
+        self.reference = Some(aid);
+        self.gyro = UnitQuaternion::identity();
+        self.gyro_dt = T::zero();
+        // The block closes at its length, within half an interval (ten
+        // 0.1-s intervals sum to a hair under 1 s in floating point).
+        if self.sum_dt > T::zero() && self.sum_dt >= cfg.block_s - interval * T::lit(0.5) {
+            let mean = self.sum / self.sum_dt;
+            self.sum = Vector3::zeros();
+            self.sum_dt = T::zero();
+            self.close_block(cfg, mean, bound);
+        }
+    }
+
+    /// Ring index of the block `age` blocks before the newest.
+    fn slot(&self, age: usize) -> Option<usize> {
+        (age < self.filled).then(|| (self.head + RING - 1 - age) % RING)
+    }
+
+    /// Mean of the `len` blocks ending `age` blocks before the newest.
+    fn window(&self, age: usize, len: usize) -> Option<Vector3<T>> {
+        if len == 0 || self.filled < age + len {
+            return None;
+        }
+        let mut s = Vector3::zeros();
+        for a in age..age + len {
+            s += self.blocks.get(self.slot(a)?)?;
+        }
+        Some(s / T::lit(len as f64))
+    }
+
+    fn close_block(&mut self, cfg: &AttitudeRateConfig<T>, mean: Vector3<T>, bound: &Vector3<T>) {
+        if let Some(b) = self.blocks.get_mut(self.head) {
+            *b = mean;
+        }
+        let ext = if self.external {
+            T::lit(EXTERNAL_FLAG_RATIO)
+        } else {
+            T::zero()
+        };
+        if let Some(r) = self.ratio_at.get_mut(self.head) {
+            *r = Vector3::from_element(ext);
+        }
+        self.external = false;
+        self.head = (self.head + 1) % RING;
+        self.filled = (self.filled + 1).min(RING);
+        if self.judging {
+            self.decide(cfg, bound);
+        }
+        self.learn(cfg);
+    }
+
+    /// The learnt offset (unclamped mean), block variance and block count
+    /// of channel `c`.
+    fn moments(&self, c: usize) -> Option<(T, T, T)> {
+        let n = *self.n_b.get(c)?;
+        if n <= T::one() {
+            return None;
+        }
+        let m = *self.s1.get(c)? / n;
+        let v = (*self.s2.get(c)? / n - m * m).fmax(T::zero());
+        Some((m, v, n))
+    }
+
+    /// The learnt variance of length `k`'s window mean on channel `c` and
+    /// its degrees of freedom (module notes).
+    fn window_variance(
+        &mut self,
+        cfg: &AttitudeRateConfig<T>,
+        k: usize,
+        c: usize,
+    ) -> Option<(T, T)> {
+        let len = T::lit(f64::from(*cfg.lengths.get(k)?));
+        let (_, vb, n) = self.moments(c)?;
+        if vb <= T::zero() {
+            return None;
+        }
+        let qw = *self.q_w.get(k)?.get(c)?;
+        let nw = *self.n_w.get(k)?.get(c)?;
+        let white = vb / len;
+        let n_eff = nw * T::lit(OBM_DOF) / len;
+        let nu = cfg.prior_windows + n_eff;
+        let rho_hat = if nw > T::zero() {
+            qw / nw / white
+        } else {
+            T::one()
+        };
+        let rho = (cfg.prior_windows + n_eff * rho_hat) / nu;
+        Some((vb * rho * (T::one() / len + T::one() / n), nu))
+    }
+
+    /// The Student-t threshold at `nu` degrees of freedom, cached per
+    /// length and channel.
+    fn threshold(&mut self, k: usize, c: usize, nu: T) -> Option<T> {
+        let alpha = self.alpha;
+        let slot = self.quantile.get_mut(k)?.get_mut(c)?;
+        if (slot.0 - nu).abs() > nu * T::lit(0.01) {
+            let t = student_t_upper_quantile(alpha * 0.5, nu.to_f64()).ok()?;
+            *slot = (nu, T::lit(t));
+        }
+        Some(slot.1)
+    }
+
+    /// Scores the newest windows of each length, updates the runs, flags
+    /// and estimates.
+    fn decide(&mut self, cfg: &AttitudeRateConfig<T>, bound: &Vector3<T>) {
+        let longest = usize::from(cfg.lengths[NL - 1]);
+        let mut best = [T::zero(); 3];
+        let mut sign = [0i8; 3];
+        let mut est = [T::zero(); 3];
+        for (k, len) in cfg.lengths.iter().map(|l| usize::from(*l)).enumerate() {
+            let Some(w) = self.window(0, len) else {
+                continue;
+            };
+            for c in 0..3 {
+                let Some((m, _, n)) = self.moments(c) else {
+                    continue;
+                };
+                // The offset must rest on two longest windows of blocks.
+                if n < T::lit(2.0 * longest as f64) {
+                    continue;
+                }
+                let Some((var, nu)) = self.window_variance(cfg, k, c) else {
+                    continue;
+                };
+                if nu < cfg.min_dof {
+                    continue;
+                }
+                let Some(t) = self.threshold(k, c, nu) else {
+                    continue;
+                };
+                let lim = bound.get(c).copied().unwrap_or_else(T::zero);
+                let off = m.fmax(-lim).fmin(lim);
+                let Some(wc) = w.get(c) else {
+                    continue;
+                };
+                let dev = *wc - off;
+                let r = dev.abs() / (var.sqrt_fast() * t);
+                if let (Some(b), Some(sg), Some(e)) =
+                    (best.get_mut(c), sign.get_mut(c), est.get_mut(c))
+                {
+                    if r > *b {
+                        *b = r;
+                        *sg = if dev > T::zero() { 1 } else { -1 };
+                        *e = dev;
+                    }
+                }
+            }
+        }
+        let hold_blocks = cfg.lengths[0];
+        for c in 0..3 {
+            let (Some(r), Some(sg), Some(run), Some(hold), Some(flag), Some(e), Some(out)) = (
+                best.get(c),
+                sign.get(c),
+                self.run.get_mut(c),
+                self.hold.get_mut(c),
+                self.detail.flag.get_mut(c),
+                est.get(c),
+                self.detail.estimate.get_mut(c),
+            ) else {
+                continue;
+            };
+            if *r > T::one() {
+                *run = if run.1 == *sg {
+                    (run.0.saturating_add(1), *sg)
+                } else {
+                    (1, *sg)
+                };
+            } else {
+                *run = (0, 0);
+            }
+            if run.0 >= cfg.confirm {
+                *flag = run.1;
+                *hold = hold_blocks;
+                *out = *e;
+            } else if *hold > 0 {
+                *hold -= 1;
+            } else {
+                *flag = 0;
+                *out = T::zero();
+            }
+        }
+        if let Some(r) = self.slot(0).and_then(|i| self.ratio_at.get_mut(i)) {
+            for (x, b) in r.iter_mut().zip(best.iter()) {
+                *x = x.fmax(*b);
+            }
+        }
+        self.detail.ratio = best;
+    }
+
+    /// Learns the block `longest − 1` blocks back (every decision that saw
+    /// it has been made) and the windows that end at it, on the channels
+    /// where every decision that saw any of their blocks stayed below
+    /// `learn_below`.
+    fn learn(&mut self, cfg: &AttitudeRateConfig<T>) {
+        let longest = usize::from(cfg.lengths[NL - 1]);
+        let age = longest - 1;
+        let Some(block) = self.slot(age).and_then(|i| self.blocks.get(i)).copied() else {
+            return;
+        };
+        let mut worst = Vector3::<T>::zeros();
+        for a in 0..(age + longest).min(self.filled) {
+            if let Some(r) = self.slot(a).and_then(|i| self.ratio_at.get(i)) {
+                worst = worst.sup(r);
+            }
+        }
+        let keep = T::one() - T::one() / cfg.memory_blocks;
+        let mut windows = [None; NL];
+        for (w, len) in windows.iter_mut().zip(cfg.lengths.iter()) {
+            *w = self.window(age, usize::from(*len));
+        }
+        for c in 0..3 {
+            if !worst.get(c).is_some_and(|r| *r < cfg.learn_below) {
+                continue;
+            }
+            let (Some(n), Some(s1), Some(s2), Some(b)) = (
+                self.n_b.get_mut(c),
+                self.s1.get_mut(c),
+                self.s2.get_mut(c),
+                block.get(c),
+            ) else {
+                continue;
+            };
+            *n = *n * keep + T::one();
+            *s1 = *s1 * keep + *b;
+            *s2 = *s2 * keep + *b * *b;
+            let mean = *s1 / *n;
+            for ((q, nw), w) in self
+                .q_w
+                .iter_mut()
+                .zip(self.n_w.iter_mut())
+                .zip(windows.iter())
+            {
+                let (Some(q), Some(nw), Some(wc)) = (
+                    q.get_mut(c),
+                    nw.get_mut(c),
+                    w.as_ref().and_then(|w| w.get(c)),
+                ) else {
+                    continue;
+                };
+                let d = *wc - mean;
+                *q = *q * keep + d * d;
+                *nw = *nw * keep + T::one();
+            }
+        }
+        // What the report shows of the learnt state.
+        let lengths = cfg.lengths;
+        for c in 0..3 {
+            let Some((m, _, _)) = self.moments(c) else {
+                continue;
+            };
+            if let Some(o) = self.detail.offset.get_mut(c) {
+                *o = m;
+            }
+            for k in 0..NL {
+                let Some((var, nu)) = self.window_variance(cfg, k, c) else {
+                    continue;
+                };
+                let Some((_, vb, n)) = self.moments(c) else {
+                    continue;
+                };
+                let len = T::lit(f64::from(lengths.get(k).copied().unwrap_or(1)));
+                let rho = var / (vb * (T::one() / len + T::one() / n));
+                if let Some(d) = self.detail.reddening.get_mut(k).and_then(|d| d.get_mut(c)) {
+                    *d = rho;
+                }
+                if let Some(d) = self.detail.dof.get_mut(k).and_then(|d| d.get_mut(c)) {
+                    *d = nu;
+                }
+            }
+        }
+    }
+}
+
+impl<T: Real, const W: usize> UkfMonitor<T, W> {
+    /// The test runs (configured; compiled in, as this file is).
+    pub(super) fn attitude_rate_on(&self) -> bool {
+        self.cfg.attitude_rate.is_some()
+    }
+
+    /// What the gyro/attitude-aiding consistency test shows (`None` when it
+    /// is off): ratios, flags, estimates, learnt offset, reddening factors
+    /// and degrees of freedom.
+    pub fn attitude_rate_detail(&self) -> Option<AttitudeRateDetail<T>> {
+        self.attitude_rate_on().then_some(self.att_rate.detail)
+    }
+
+    /// One IMU sample (raw) into the interval under way; `usable`: the
+    /// sample was valid and the statistics are not held (else the interval
+    /// is dropped).
+    pub(super) fn att_rate_sample(&mut self, imu: &ImuVec<T>, dt: T, usable: bool) {
+        if !self.attitude_rate_on() {
+            return;
+        }
+        let learning = matches!(
+            self.phase,
+            super::Phase::Learning | super::Phase::Monitoring
+        );
+        if usable && learning && self.stats_holdoff <= T::zero() {
+            let rate: Vector3<T> = imu.fixed_rows::<3>(3).into_owned();
+            self.att_rate.integrate(&rate, dt);
+        } else {
+            self.att_rate.invalidate();
+        }
+    }
+
+    /// After an aiding update: an attitude epoch the UKF fused closes the
+    /// interval; one it rejected is skipped (the gyro integrates on).
+    pub(super) fn att_rate_epoch(&mut self, aiding: &Measurement<T>) {
+        let Some(cfg) = self.cfg.attitude_rate else {
+            return;
+        };
+        if !matches!(
+            self.phase,
+            super::Phase::Learning | super::Phase::Monitoring
+        ) || self.stats_holdoff > T::zero()
+        {
+            self.att_rate.invalidate();
+            return;
+        }
+        let fused = self
+            .report
+            .detail
+            .diag
+            .iter()
+            .skip(3)
+            .all(|d| d.available && d.fused);
+        if !fused || !aiding.available.iter().skip(3).all(|a| *a) {
+            return;
+        }
+        let att = aiding.z.fixed_rows::<3>(3);
+        let euler = [att.x, att.y, att.z];
+        let cap = self
+            .cfg
+            .max_nominal_bias
+            .unwrap_or_else(|| self.cfg.min_fault * T::lit(MAX_NOMINAL_BIAS_FACTOR));
+        let bound: Vector3<T> = cap.fixed_rows::<3>(3).into_owned();
+        let external =
+            self.phase == super::Phase::Monitoring
+                && self.report.status.iter().any(|s| {
+                    matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative)
+                });
+        self.att_rate
+            .epoch(&cfg, euler, &bound, self.cfg.aiding_timeout_s, external);
+    }
+
+    /// Adds the test's flags to the report: a gyro channel the UKF finds
+    /// healthy is reported faulty while the test flags it, with the window
+    /// mean as its estimate.
+    pub(super) fn att_rate_apply(&mut self) {
+        if !self.attitude_rate_on() {
+            return;
+        }
+        let d = &self.att_rate.detail;
+        for ((st, e), (f, m)) in self
+            .report
+            .status
+            .iter_mut()
+            .zip(self.report.fault_estimate.iter_mut())
+            .skip(3)
+            .zip(d.flag.iter().zip(d.estimate.iter()))
+        {
+            if *f == 0 || !matches!(st, ChannelState::Healthy) {
+                continue;
+            }
+            *st = if *f > 0 {
+                ChannelState::FaultPositive
+            } else {
+                ChannelState::FaultNegative
+            };
+            *e = *m;
+        }
+    }
+
+    /// The test is quiet (every ratio below half its threshold) or off: the
+    /// UKF's drift tracker may learn.
+    pub(super) fn att_rate_quiet(&self) -> bool {
+        !self.attitude_rate_on() || self.att_rate.quiet(T::lit(0.5))
+    }
+
+    /// Forgets the intervals and windows (re-alignment).
+    pub(super) fn att_rate_clear(&mut self) {
+        self.att_rate.clear_windows();
+    }
+
+    /// Starts afresh (learning restarted).
+    pub(super) fn att_rate_reset(&mut self) {
+        self.att_rate.reset();
+    }
+
+    /// Decisions start (monitoring).
+    pub(super) fn att_rate_start(&mut self) {
+        self.att_rate.start_judging();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::indexing_slicing)] // test code
+    use super::*;
+
+    const DEG: f64 = core::f64::consts::PI / 180.0;
+
+    /// A small deterministic Gaussian source (xorshift + Box–Muller).
+    struct Noise(u64);
+    impl Noise {
+        fn uniform(&mut self) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+        }
+        fn gauss(&mut self) -> f64 {
+            let (u, v) = (self.uniform(), self.uniform());
+            libm::sqrt(-2.0 * libm::log(u)) * libm::cos(2.0 * core::f64::consts::PI * v)
+        }
+        fn vec(&mut self, s: f64) -> Vector3<f64> {
+            Vector3::new(self.gauss(), self.gauss(), self.gauss()) * s
+        }
+    }
+
+    /// A body turning at `rate(t)` (rad/s, piecewise constant over each
+    /// 100-Hz IMU sample, so the truth is exact), its gyro reading
+    /// `rate + bias(t) + white noise`, and 10-Hz attitude aiding with white
+    /// errors of `aid_sd` per axis, fed to `ar` for `secs` from `t0`.
+    /// Returns the truth attitude at the end.
+    #[allow(clippy::too_many_arguments)]
+    fn fly<T: Real>(
+        ar: &mut AttitudeRate<T>,
+        cfg: &AttitudeRateConfig<T>,
+        truth: UnitQuaternion<f64>,
+        t0: f64,
+        secs: f64,
+        rate: impl Fn(f64) -> Vector3<f64>,
+        bias: impl Fn(f64) -> Vector3<f64>,
+        noise: &mut Noise,
+        gyro_sd: f64,
+        aid_sd: f64,
+    ) -> UnitQuaternion<f64> {
+        let dt = 0.01;
+        let mut q = truth;
+        let bound = Vector3::from_element(T::lit(1.0));
+        let steps = libm::round(secs / dt) as usize;
+        for i in 0..steps {
+            let t = t0 + i as f64 * dt;
+            let w = rate(t);
+            q *= rotation_exp(&(w * dt));
+            let g = w + bias(t) + noise.vec(gyro_sd);
+            ar.integrate(&g.map(T::lit), T::lit(dt));
+            if (i + 1) % 10 == 0 {
+                let aid = q * rotation_exp(&noise.vec(aid_sd));
+                let (r, p, y) = aid.euler_angles();
+                ar.epoch(
+                    cfg,
+                    [T::lit(r), T::lit(p), T::lit(y)],
+                    &bound,
+                    T::lit(1.0),
+                    false,
+                );
+            }
+        }
+        q
+    }
+
+    fn turning(t: f64) -> Vector3<f64> {
+        Vector3::new(
+            60.0 * libm::sin(0.7 * t),
+            45.0 * libm::cos(1.1 * t),
+            20.0 * libm::sin(0.3 * t + 1.0),
+        ) * DEG
+    }
+
+    #[test]
+    fn log_and_exp_are_inverse_and_small_angles_keep_their_digits_in_f32() {
+        for v in [
+            Vector3::new(0.3, -1.2, 2.0),
+            Vector3::new(1e-3, 2e-3, -3e-3),
+            Vector3::new(0.0, 3.0, 0.1),
+        ] {
+            let back = rotation_log(&rotation_exp(&v));
+            assert!((back - v).norm() < 1e-12 * (1.0 + v.norm()), "{v} {back}");
+        }
+        // 2 °/s over 0.1 s in f32: within 1e-4 relative (acos would lose
+        // ≈ 10 %).
+        let v = Vector3::new(2.0 * DEG * 0.1, 0.0, 0.0).map(|x| x as f32);
+        let back = rotation_log(&rotation_exp(&v));
+        assert!((back - v).norm() / v.norm() < 1e-4, "{back}");
+    }
+
+    /// Constant body rate (≈ 110 °/s about a skew axis) and constant bias,
+    /// no noise: every residual is the bias exactly to first order, so
+    /// the block means equal it (to 1e-3 of it; the second-order term is
+    /// `|b|Δt` ≈ 5e-3 rad here). Without the Jacobian it would be turned
+    /// by ½·ω·Δt ≈ 5.5°, a 10 % error across axes.
+    #[test]
+    fn constant_rate_and_bias_give_the_bias() {
+        let cfg = AttitudeRateConfig::<f64>::flight();
+        let mut ar = AttitudeRate::<f64>::new(cfg.alpha());
+        let w = Vector3::new(1.0, -0.7, 1.5);
+        let b = Vector3::new(2.0, -3.0, 1.0) * DEG;
+        let q0 = UnitQuaternion::from_euler_angles(0.2, -0.3, 1.0);
+        let mut n = Noise(7);
+        fly(&mut ar, &cfg, q0, 0.0, 30.0, |_| w, |_| b, &mut n, 0.0, 0.0);
+        assert!(ar.filled >= 40);
+        for a in 0..ar.filled {
+            let m = ar.blocks[ar.slot(a).unwrap()];
+            assert!((m - b).norm() < 1e-3 * b.norm(), "{m} vs {b}");
+        }
+        // The same in f32 (the MCU's type): 1 % of the bias.
+        let cfg32 = AttitudeRateConfig::<f32>::flight();
+        let mut ar32 = AttitudeRate::<f32>::new(cfg32.alpha());
+        let mut n = Noise(7);
+        fly(
+            &mut ar32,
+            &cfg32,
+            q0,
+            0.0,
+            30.0,
+            |_| w,
+            |_| b,
+            &mut n,
+            0.0,
+            0.0,
+        );
+        for a in 0..ar32.filled {
+            let m = ar32.blocks[ar32.slot(a).unwrap()].map(f64::from);
+            assert!((m - b).norm() < 1e-2 * b.norm(), "{m} vs {b}");
+        }
+    }
+
+    /// A body turning at up to 75 °/s on all axes, a constant bias: the
+    /// quaternion integration across each 0.1-s interval keeps the block
+    /// means on the bias (within 2 % of it; 1.4 % is the residual
+    /// second-order term of a varying rate).
+    #[test]
+    fn a_turning_body_gives_the_bias() {
+        let cfg = AttitudeRateConfig::<f64>::flight();
+        let mut ar = AttitudeRate::<f64>::new(cfg.alpha());
+        let b = Vector3::new(-1.0, 2.0, 0.5) * DEG;
+        let mut n = Noise(3);
+        fly(
+            &mut ar,
+            &cfg,
+            UnitQuaternion::identity(),
+            0.0,
+            20.0,
+            turning,
+            |_| b,
+            &mut n,
+            0.0,
+            0.0,
+        );
+        for a in 0..ar.filled {
+            let m = ar.blocks[ar.slot(a).unwrap()];
+            assert!((m - b).norm() < 0.02 * b.norm(), "{m} vs {b}");
+        }
+    }
+
+    /// Learning `secs` of healthy turning flight (gyro 0.5 °/s/√Hz-class
+    /// noise, 0.3° aiding errors), then judging.
+    fn learnt<T: Real>(secs: f64, n: &mut Noise) -> (AttitudeRate<T>, UnitQuaternion<f64>) {
+        let cfg = AttitudeRateConfig::<T>::flight();
+        let mut ar = AttitudeRate::<T>::new(cfg.alpha());
+        let bias = Vector3::new(0.3, -0.2, 0.1) * DEG;
+        let q = fly(
+            &mut ar,
+            &cfg,
+            UnitQuaternion::identity(),
+            0.0,
+            secs,
+            turning,
+            |_| bias,
+            n,
+            0.02,
+            0.3 * DEG,
+        );
+        ar.start_judging();
+        (ar, q)
+    }
+
+    /// The flag: raised with its sign and size on a 2 °/s step within
+    /// 10 s, never raised on healthy flight, cleared once the windows no
+    /// longer hold the fault (within the longest window, the hold and two
+    /// decisions: 13.5 s), and the offset and variance not learnt
+    /// meanwhile; then a negative step on another axis.
+    #[test]
+    fn a_step_is_flagged_learnt_never_and_the_flag_clears() {
+        let cfg = AttitudeRateConfig::<f64>::flight();
+        let mut n = Noise(11);
+        let (mut ar, mut q) = learnt::<f64>(60.0, &mut n);
+        let base = Vector3::new(0.3, -0.2, 0.1) * DEG;
+        let mut t = 60.0;
+        let mut max_ratio: f64 = 0.0;
+        for _ in 0..120 {
+            q = fly(
+                &mut ar,
+                &cfg,
+                q,
+                t,
+                1.0,
+                turning,
+                |_| base,
+                &mut n,
+                0.02,
+                0.3 * DEG,
+            );
+            t += 1.0;
+            assert_eq!(
+                ar.detail.flag, [0; 3],
+                "healthy flagged at {t}: {:?}",
+                ar.detail.ratio
+            );
+            max_ratio = max_ratio.max(ar.detail.ratio.iter().copied().fold(0.0, f64::max));
+        }
+        assert!(max_ratio > 0.2 && max_ratio < 1.0, "{max_ratio}");
+        let (n_b, s1) = (ar.n_b[0], ar.s1[0]);
+        let step = Vector3::new(2.0, 0.0, 0.0) * DEG;
+        let mut found = None;
+        for k in 0..40 {
+            q = fly(
+                &mut ar,
+                &cfg,
+                q,
+                t,
+                0.5,
+                turning,
+                |_| base + step,
+                &mut n,
+                0.02,
+                0.3 * DEG,
+            );
+            t += 0.5;
+            if found.is_none() && ar.detail.flag[0] == 1 {
+                found = Some(0.5 * (k + 1) as f64);
+            }
+        }
+        let found = found.expect("2 °/s step not flagged in 20 s");
+        assert!(found <= 10.0, "{found}");
+        assert_eq!(ar.detail.flag, [1, 0, 0]);
+        assert!(
+            (ar.detail.estimate[0] - 2.0 * DEG).abs() < 0.5 * DEG,
+            "{}",
+            ar.detail.estimate[0] / DEG
+        );
+        // Nothing of the fault was learnt (the forgetting alone moved the
+        // sums by < 2 %).
+        assert!(
+            (ar.s1[0] / ar.n_b[0] - s1 / n_b).abs() < 0.05 * DEG,
+            "offset moved"
+        );
+        let mut cleared = None;
+        for k in 0..60 {
+            q = fly(
+                &mut ar,
+                &cfg,
+                q,
+                t,
+                0.5,
+                turning,
+                |_| base,
+                &mut n,
+                0.02,
+                0.3 * DEG,
+            );
+            t += 0.5;
+            if cleared.is_none() && ar.detail.flag == [0; 3] {
+                cleared = Some(0.5 * (k + 1) as f64);
+            }
+            if let Some(c) = cleared {
+                assert_eq!(
+                    ar.detail.flag,
+                    [0; 3],
+                    "raised again {} s after clearing",
+                    0.5 * (k + 1) as f64 - c
+                );
+            }
+        }
+        let cleared = cleared.expect("never cleared");
+        assert!(cleared <= 13.5, "{cleared}");
+        assert!(ar.n_b[0] > n_b, "learning did not resume");
+        for _ in 0..40 {
+            q = fly(
+                &mut ar,
+                &cfg,
+                q,
+                t,
+                0.5,
+                turning,
+                |_| base - step.yzx(),
+                &mut n,
+                0.02,
+                0.3 * DEG,
+            );
+            t += 0.5;
+        }
+        assert_eq!(ar.detail.flag, [0, 0, -1]);
+    }
+
+    /// `f32` against `f64` on the same flight: block means within 1e-3
+    /// °/s, ratios within 1 %.
+    #[test]
+    fn f32_agrees_with_f64() {
+        let (mut a64, q) = learnt::<f64>(60.0, &mut Noise(5));
+        let (mut a32, _) = learnt::<f32>(60.0, &mut Noise(5));
+        for a in 0..a64.filled {
+            let d =
+                a64.blocks[a64.slot(a).unwrap()] - a32.blocks[a32.slot(a).unwrap()].map(f64::from);
+            assert!(d.norm() < 1e-3 * DEG, "{d}");
+        }
+        let b = Vector3::new(1.5, 0.0, 0.0) * DEG;
+        let c64 = AttitudeRateConfig::<f64>::flight();
+        let c32 = AttitudeRateConfig::<f32>::flight();
+        fly(
+            &mut a64,
+            &c64,
+            q,
+            60.0,
+            8.0,
+            turning,
+            |_| b,
+            &mut Noise(9),
+            0.02,
+            0.3 * DEG,
+        );
+        fly(
+            &mut a32,
+            &c32,
+            q,
+            60.0,
+            8.0,
+            turning,
+            |_| b,
+            &mut Noise(9),
+            0.02,
+            0.3 * DEG,
+        );
+        for (r64, r32) in a64.detail.ratio.iter().zip(a32.detail.ratio.iter()) {
+            assert!(
+                (r64 - f64::from(*r32)).abs() < 0.01 * r64.max(0.1),
+                "{r64} {r32}"
+            );
+        }
+        assert!(a64.detail.ratio[0] > 0.5, "{:?}", a64.detail.ratio);
+    }
+}
