@@ -33,12 +33,18 @@ enum Setup {
     EstimateDelay,
     /// Plus the heading-offset estimate.
     EstimateHeading,
+    /// Plus the gyro/attitude-aiding consistency test (replay's flight
+    /// settings).
+    AttitudeRate,
 }
 
 fn config(scn: &Scenario, setup: Setup) -> UkfMonitorConfig<f32> {
     let mut c = monitor_config::<f32>(scn, &RunOptions::default());
     c.estimate_aiding_delay = matches!(setup, Setup::EstimateDelay);
     c.estimate_heading_offset = matches!(setup, Setup::EstimateHeading);
+    if matches!(setup, Setup::AttitudeRate) {
+        c.attitude_rate = Some(imu_fdi::monitor::AttitudeRateConfig::flight());
+    }
     c
 }
 
@@ -127,6 +133,28 @@ fn aircraft_ten_fault_free_hours() {
     );
     assert!(m.free_time_s > 10.0 * 3580.0);
     assert_eq!(m.false_alarm_events, 0);
+}
+
+/// GIVEN the aircraft, WHEN the gyro/attitude-aiding consistency test
+/// (replay's flight settings) runs besides the innovation windows, THEN
+/// the episode figures and the fault-free hours are as measured
+/// (docs/results.md): what enabling it in the aircraft preset would cost.
+#[test]
+#[ignore = "20 seeds of episodes and 10 h: run with --release -- --ignored"]
+fn aircraft_attitude_rate_test() {
+    let base = Scenario::aircraft_fault_free(0.0);
+    let t = episodes_with(&base, 100..120, Setup::AttitudeRate);
+    println!("aircraft + attitude-rate test, seeds 100-119: {}", t.line());
+    let m = fault_free_with(
+        &Scenario::aircraft_fault_free(3600.0),
+        200..210,
+        Setup::AttitudeRate,
+    );
+    println!(
+        "aircraft + attitude-rate test, 10 fault-free hours (seeds 200-209): {} false-alarm events in {:.2} h",
+        m.false_alarm_events,
+        m.free_time_s / 3600.0
+    );
 }
 
 /// GIVEN aiding 0.2 s late, not stated to the monitor, WHEN it estimates

@@ -45,13 +45,16 @@ pub struct AttitudeRateConfig<T> {
     /// Consecutive decisions above threshold, with one sign, before a
     /// channel is flagged.
     pub confirm: u8,
+    /// Decisions a flag holds after the last confirmed one (against
+    /// flicker of a fault near threshold).
+    pub hold: u8,
 }
 
 impl<T: Real> AttitudeRateConfig<T> {
     /// Half-second blocks, windows of 2.5, 5 and 10 s, 10 false alarms per
     /// hour by design, a white prior worth 4 windows, judging from 6
     /// degrees of freedom, learning below 0.8 of the threshold, 10 minutes
-    /// of memory, two decisions to flag.
+    /// of memory, two decisions to flag, held for one more.
     pub fn flight() -> Self {
         Self {
             block_s: T::lit(0.5),
@@ -62,6 +65,7 @@ impl<T: Real> AttitudeRateConfig<T> {
             learn_below: T::lit(0.8),
             memory_blocks: T::lit(1200.0),
             confirm: 2,
+            hold: 1,
         }
     }
 
@@ -100,6 +104,9 @@ impl<T: Real> AttitudeRateConfig<T> {
         }
         if self.confirm == 0 {
             return Err("attitude_rate.confirm");
+        }
+        if usize::from(self.hold) > ATTITUDE_RATE_MAX_BLOCKS {
+            return Err("attitude_rate.hold");
         }
         Ok(())
     }

@@ -64,10 +64,18 @@
 //! **Decisions.** The largest score/threshold ratio over the lengths, with
 //! its sign; `confirm` consecutive ratios above 1 with one sign flag the
 //! channel, with the window mean (less the offset) as its size. The flag
-//! holds for `lengths[0]` blocks after the last confirmed decision and then
-//! clears: the way back to nominal is the windows no longer holding the
-//! fault (at most the longest window plus the hold after it ends; never
-//! stuck, since the offset is not learnt meanwhile). A flag is merged into
+//! holds for `hold` blocks after the last confirmed decision and then
+//! clears. **The way back to nominal**: a 10-s window holds a fault for
+//! 10 s after it has ended, so a longer window's verdict is withdrawn as
+//! soon as the newest shortest window contradicts it (falls short of the
+//! longer window's deviation, in its sign, by more than the shortest
+//! window's own threshold deviation: under a persisting fault that has
+//! the test's per-decision probability); the longer lengths are then
+//! muted on that channel until their windows have flushed, while the
+//! shortest still judges. Without it (a fault small against the shortest
+//! window's spread) the flag clears once no window holds the fault: at
+//! most the longest window plus the hold after the fault ends. Never
+//! stuck: the offset is not learnt meanwhile. A flag is merged into
 //! the UKF's report only on a gyro channel the UKF judges healthy; before
 //! this test can judge it changes nothing (the UKF's test still decides,
 //! and `NotMonitored` stays so).
@@ -193,6 +201,8 @@ pub(super) struct AttitudeRate<T> {
     run: [(u8, i8); 3],
     /// Blocks the flag still holds after the last confirmed decision.
     hold: [u8; 3],
+    /// Blocks the longer lengths stay muted per channel (a fault ended).
+    mute: [u8; 3],
     pub(super) detail: AttitudeRateDetail<T>,
 }
 
@@ -220,6 +230,7 @@ impl<T: Real> AttitudeRate<T> {
             judging: false,
             run: [(0, 0); 3],
             hold: [0; 3],
+            mute: [0; 3],
             detail: AttitudeRateDetail::default(),
         }
     }
@@ -238,6 +249,7 @@ impl<T: Real> AttitudeRate<T> {
         self.filled = 0;
         self.run = [(0, 0); 3];
         self.hold = [0; 3];
+        self.mute = [0; 3];
         self.detail.flag = [0; 3];
         self.detail.estimate = [T::zero(); 3];
         self.detail.ratio = [T::zero(); 3];
@@ -405,9 +417,9 @@ impl<T: Real> AttitudeRate<T> {
     /// and estimates.
     fn decide(&mut self, cfg: &AttitudeRateConfig<T>, bound: &Vector3<T>) {
         let longest = usize::from(cfg.lengths[NL - 1]);
-        let mut best = [T::zero(); 3];
-        let mut sign = [0i8; 3];
-        let mut est = [T::zero(); 3];
+        // Per length and channel: the window mean less the offset and the
+        // deviation at threshold (`None`: this length cannot judge yet).
+        let mut judged = [[None::<(T, T)>; 3]; NL];
         for (k, len) in cfg.lengths.iter().map(|l| usize::from(*l)).enumerate() {
             let Some(w) = self.window(0, len) else {
                 continue;
@@ -431,23 +443,65 @@ impl<T: Real> AttitudeRate<T> {
                 };
                 let lim = bound.get(c).copied().unwrap_or_else(T::zero);
                 let off = m.fmax(-lim).fmin(lim);
-                let Some(wc) = w.get(c) else {
+                let (Some(wc), Some(slot)) =
+                    (w.get(c), judged.get_mut(k).and_then(|j| j.get_mut(c)))
+                else {
                     continue;
                 };
-                let dev = *wc - off;
-                let r = dev.abs() / (var.sqrt_fast() * t);
+                *slot = Some((*wc - off, var.sqrt_fast() * t));
+            }
+        }
+        let mut best = [T::zero(); 3];
+        let mut sign = [0i8; 3];
+        let mut est = [T::zero(); 3];
+        // Every length's ratio, muted or not: what learning is gated on.
+        let mut worst = [T::zero(); 3];
+        for c in 0..3 {
+            let col = |k: usize| judged.get(k).and_then(|j| j.get(c)).copied().flatten();
+            // A longer window whose deviation the newest shortest window
+            // contradicts (falls short of it, in its sign, by more than the
+            // shortest window's own threshold deviation: a false rejection
+            // has the test's probability) holds a fault that has ended:
+            // the longer lengths are muted on this channel until their
+            // windows have flushed.
+            if let Some((d0, lim0)) = col(0) {
+                let ended = (1..NL).filter_map(col).any(|(d, lim)| {
+                    let s = if d > T::zero() { T::one() } else { -T::one() };
+                    d.abs() > lim && s * (d - d0) > lim0
+                });
+                if ended {
+                    if let Some(m) = self.mute.get_mut(c) {
+                        *m = cfg.lengths[NL - 1];
+                    }
+                }
+            }
+            let muted = self.mute.get(c).is_some_and(|m| *m > 0);
+            for k in 0..NL {
+                let Some((d, lim)) = col(k) else {
+                    continue;
+                };
+                let r = d.abs() / lim;
+                if let Some(w) = worst.get_mut(c) {
+                    *w = w.fmax(r);
+                }
+                if muted && k > 0 {
+                    continue;
+                }
                 if let (Some(b), Some(sg), Some(e)) =
                     (best.get_mut(c), sign.get_mut(c), est.get_mut(c))
                 {
                     if r > *b {
                         *b = r;
-                        *sg = if dev > T::zero() { 1 } else { -1 };
-                        *e = dev;
+                        *sg = if d > T::zero() { 1 } else { -1 };
+                        *e = d;
                     }
                 }
             }
+            if let Some(m) = self.mute.get_mut(c) {
+                *m = m.saturating_sub(1);
+            }
         }
-        let hold_blocks = cfg.lengths[0];
+        let hold_blocks = cfg.hold;
         for c in 0..3 {
             let (Some(r), Some(sg), Some(run), Some(hold), Some(flag), Some(e), Some(out)) = (
                 best.get(c),
@@ -481,7 +535,7 @@ impl<T: Real> AttitudeRate<T> {
             }
         }
         if let Some(r) = self.slot(0).and_then(|i| self.ratio_at.get_mut(i)) {
-            for (x, b) in r.iter_mut().zip(best.iter()) {
+            for (x, b) in r.iter_mut().zip(worst.iter()) {
                 *x = x.fmax(*b);
             }
         }
