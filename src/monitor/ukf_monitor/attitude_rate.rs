@@ -100,6 +100,22 @@ const OBM_DOF: f64 = 1.5;
 /// Ratio recorded for a block during which the UKF flagged a channel: no
 /// learning from it.
 const EXTERNAL_FLAG_RATIO: f64 = 1e3;
+/// Bins of the learnt blocks' motion (mean squared rate), half a decade
+/// each from 1e-8 (rad/s)² (at rest) up; the last is open.
+const MOTION_BINS: usize = 24;
+const MOTION_LOG10_MIN: f64 = -8.0;
+
+/// The motion bin of a mean squared rate.
+fn motion_bin<T: Real>(m: T) -> usize {
+    let x: f64 = m.to_f64();
+    let l = libm::log10(if x > 1e-30 { x } else { 1e-30 });
+    let b: f64 = libm::floor((l - MOTION_LOG10_MIN) * 2.0);
+    if b <= 0.0 {
+        0
+    } else {
+        (b as usize).min(MOTION_BINS - 1)
+    }
+}
 
 /// `log(q)` as a rotation vector, by `atan2` (no `acos` near 1, which
 /// loses half the digits of a small angle in `f32`).
@@ -170,9 +186,17 @@ fn from_euler<T: Real>(roll: T, pitch: T, yaw: T) -> UnitQuaternion<T> {
 pub(super) struct AttitudeRate<T> {
     /// Per-decision false-alarm probability, two-sided.
     alpha: f64,
-    /// The gyro rotation since the reference epoch, and its time.
+    /// The gyro rotation since the reference epoch, its time and
+    /// `Σ |ω|² dt` over it.
     gyro: UnitQuaternion<T>,
     gyro_dt: T,
+    gyro_motion: T,
+    /// `Σ |ω|² dt` of the intervals in the open block.
+    sum_motion: T,
+    /// Mean squared rate of each block in the ring.
+    motion: [T; RING],
+    /// Learnt blocks per motion bin (same forgetting as the moments).
+    motion_hist: [T; MOTION_BINS],
     /// The aiding attitude the interval started from.
     reference: Option<UnitQuaternion<T>>,
     /// Sum of the residuals and of their intervals in the open block.
@@ -204,6 +228,8 @@ pub(super) struct AttitudeRate<T> {
     hold: [u8; 3],
     /// Blocks the longer lengths stay muted per channel (a fault ended).
     mute: [u8; 3],
+    /// The length (index) whose decision last confirmed each flag.
+    flag_len: [u8; 3],
     pub(super) detail: AttitudeRateDetail<T>,
 }
 
@@ -214,6 +240,10 @@ impl<T: Real> AttitudeRate<T> {
             alpha,
             gyro: UnitQuaternion::identity(),
             gyro_dt: T::zero(),
+            gyro_motion: T::zero(),
+            sum_motion: T::zero(),
+            motion: [T::zero(); RING],
+            motion_hist: [T::zero(); MOTION_BINS],
             reference: None,
             sum: Vector3::zeros(),
             sum_dt: T::zero(),
@@ -232,6 +262,7 @@ impl<T: Real> AttitudeRate<T> {
             run: [(0, 0); 3],
             hold: [0; 3],
             mute: [0; 3],
+            flag_len: [0; 3],
             detail: AttitudeRateDetail::default(),
         }
     }
@@ -247,6 +278,7 @@ impl<T: Real> AttitudeRate<T> {
         self.invalidate();
         self.sum = Vector3::zeros();
         self.sum_dt = T::zero();
+        self.sum_motion = T::zero();
         self.filled = 0;
         self.run = [(0, 0); 3];
         self.hold = [0; 3];
@@ -267,6 +299,7 @@ impl<T: Real> AttitudeRate<T> {
         self.reference = None;
         self.gyro = UnitQuaternion::identity();
         self.gyro_dt = T::zero();
+        self.gyro_motion = T::zero();
     }
 
     /// One IMU sample's rotation.
@@ -274,6 +307,7 @@ impl<T: Real> AttitudeRate<T> {
         if self.reference.is_some() {
             self.gyro *= rotation_exp(&(rate * dt));
             self.gyro_dt += dt;
+            self.gyro_motion += rate.norm_squared() * dt;
         }
     }
 
@@ -309,19 +343,23 @@ impl<T: Real> AttitudeRate<T> {
                 if res.iter().all(|v| v.finite()) {
                     self.sum += res;
                     self.sum_dt += interval;
+                    self.sum_motion += self.gyro_motion;
                 }
             }
         }
         self.reference = Some(aid);
         self.gyro = UnitQuaternion::identity();
         self.gyro_dt = T::zero();
+        self.gyro_motion = T::zero();
         // The block closes at its length, within half an interval (ten
         // 0.1-s intervals sum to a hair under 1 s in floating point).
         if self.sum_dt > T::zero() && self.sum_dt >= cfg.block_s - interval * T::lit(0.5) {
             let mean = self.sum / self.sum_dt;
+            let motion = self.sum_motion / self.sum_dt;
             self.sum = Vector3::zeros();
             self.sum_dt = T::zero();
-            self.close_block(cfg, mean, bound);
+            self.sum_motion = T::zero();
+            self.close_block(cfg, mean, motion, bound);
         }
     }
 
@@ -342,9 +380,18 @@ impl<T: Real> AttitudeRate<T> {
         Some(s / T::lit(len as f64))
     }
 
-    fn close_block(&mut self, cfg: &AttitudeRateConfig<T>, mean: Vector3<T>, bound: &Vector3<T>) {
+    fn close_block(
+        &mut self,
+        cfg: &AttitudeRateConfig<T>,
+        mean: Vector3<T>,
+        motion: T,
+        bound: &Vector3<T>,
+    ) {
         if let Some(b) = self.blocks.get_mut(self.head) {
             *b = mean;
+        }
+        if let Some(m) = self.motion.get_mut(self.head) {
+            *m = motion;
         }
         let ext = if self.external {
             T::lit(EXTERNAL_FLAG_RATIO)
@@ -418,13 +465,26 @@ impl<T: Real> AttitudeRate<T> {
     /// and estimates.
     fn decide(&mut self, cfg: &AttitudeRateConfig<T>, bound: &Vector3<T>) {
         let longest = usize::from(cfg.lengths[NL - 1]);
+        let need = T::lit(longest as f64);
         // Per length and channel: the window mean less the offset and the
         // deviation at threshold (`None`: this length cannot judge yet).
         let mut judged = [[None::<(T, T)>; 3]; NL];
+        // Lengths whose newest window is more active than what was learnt.
+        let mut uncovered = [false; NL];
         for (k, len) in cfg.lengths.iter().map(|l| usize::from(*l)).enumerate() {
             let Some(w) = self.window(0, len) else {
                 continue;
             };
+            // The learnt spread holds for the motion it was learnt at: a
+            // window is judged only if two longest windows of learnt
+            // blocks were at least as active (a variance learnt at rest
+            // says nothing of flight).
+            if self.covered(len) < need {
+                if let Some(u) = uncovered.get_mut(k) {
+                    *u = true;
+                }
+                continue;
+            }
             for c in 0..3 {
                 let Some((m, _, n)) = self.moments(c) else {
                     continue;
@@ -455,6 +515,7 @@ impl<T: Real> AttitudeRate<T> {
         let mut best = [T::zero(); 3];
         let mut sign = [0i8; 3];
         let mut est = [T::zero(); 3];
+        let mut best_len = [0u8; 3];
         // Every length's ratio, muted or not: what learning is gated on.
         let mut worst = [T::zero(); 3];
         for c in 0..3 {
@@ -488,13 +549,17 @@ impl<T: Real> AttitudeRate<T> {
                 if muted && k > 0 {
                     continue;
                 }
-                if let (Some(b), Some(sg), Some(e)) =
-                    (best.get_mut(c), sign.get_mut(c), est.get_mut(c))
-                {
+                if let (Some(b), Some(sg), Some(e), Some(bl)) = (
+                    best.get_mut(c),
+                    sign.get_mut(c),
+                    est.get_mut(c),
+                    best_len.get_mut(c),
+                ) {
                     if r > *b {
                         *b = r;
                         *sg = if d > T::zero() { 1 } else { -1 };
                         *e = d;
+                        *bl = k as u8;
                     }
                 }
             }
@@ -504,6 +569,20 @@ impl<T: Real> AttitudeRate<T> {
         }
         let hold_blocks = cfg.hold;
         for c in 0..3 {
+            // A flag raised by a length that cannot judge this window (more
+            // active than anything learnt) is kept as it is: not judged is
+            // not nominal. The withdrawal (a fault that ended) still clears it.
+            let raised_by = self.flag_len.get(c).copied().unwrap_or(0);
+            let blind = self.detail.flag.get(c).is_some_and(|f| *f != 0)
+                && uncovered
+                    .get(usize::from(raised_by))
+                    .copied()
+                    .unwrap_or(false)
+                && best.get(c).is_some_and(|r| *r <= T::one())
+                && !self.mute.get(c).is_some_and(|m| *m > 0);
+            if blind {
+                continue;
+            }
             let (Some(r), Some(sg), Some(run), Some(hold), Some(flag), Some(e), Some(out)) = (
                 best.get(c),
                 sign.get(c),
@@ -528,6 +607,9 @@ impl<T: Real> AttitudeRate<T> {
                 *flag = run.1;
                 *hold = hold_blocks;
                 *out = *e;
+                if let (Some(fl), Some(bl)) = (self.flag_len.get_mut(c), best_len.get(c)) {
+                    *fl = *bl;
+                }
             } else if *hold > 0 {
                 *hold -= 1;
             } else {
@@ -541,6 +623,22 @@ impl<T: Real> AttitudeRate<T> {
             }
         }
         self.detail.ratio = best;
+    }
+
+    /// Learnt blocks (forgetting-weighted) at least as active as the
+    /// newest window of `len` blocks (its mean squared rate's bin or above).
+    fn covered(&self, len: usize) -> T {
+        let mut m = T::zero();
+        for a in 0..len {
+            if let Some(v) = self.slot(a).and_then(|i| self.motion.get(i)) {
+                m += *v;
+            }
+        }
+        let b = motion_bin(m / T::lit(len.max(1) as f64));
+        self.motion_hist
+            .iter()
+            .skip(b)
+            .fold(T::zero(), |s, h| s + *h)
     }
 
     /// Learns the block `longest − 1` blocks back (every decision that saw
@@ -560,6 +658,11 @@ impl<T: Real> AttitudeRate<T> {
             }
         }
         let keep = T::one() - T::one() / cfg.memory_blocks;
+        let motion = self
+            .slot(age)
+            .and_then(|i| self.motion.get(i))
+            .copied()
+            .unwrap_or_else(T::zero);
         let mut windows = [None; NL];
         for (w, len) in windows.iter_mut().zip(cfg.lengths.iter()) {
             *w = self.window(age, usize::from(*len));
@@ -596,6 +699,14 @@ impl<T: Real> AttitudeRate<T> {
                 let d = *wc - mean;
                 *q = *q * keep + d * d;
                 *nw = *nw * keep + T::one();
+            }
+        }
+        // The motion the learnt spread holds for: the block counts if any
+        // channel learnt it.
+        if (0..3).any(|c| worst.get(c).is_some_and(|r| *r < cfg.learn_below)) {
+            let bin = motion_bin(motion);
+            for (k, h) in self.motion_hist.iter_mut().enumerate() {
+                *h = *h * keep + if k == bin { T::one() } else { T::zero() };
             }
         }
         // What the report shows of the learnt state.
