@@ -579,7 +579,7 @@ impl<T: Real> AttitudeRate<T> {
                     .copied()
                     .unwrap_or(false)
                 && best.get(c).is_some_and(|r| *r <= T::one())
-                && !self.mute.get(c).is_some_and(|m| *m > 0);
+                && self.mute.get(c).is_none_or(|m| *m == 0);
             if blind {
                 continue;
             }
@@ -1162,6 +1162,71 @@ mod tests {
             t += 0.5;
         }
         assert_eq!(ar.detail.flag, [0, 0, -1]);
+    }
+
+    /// Learnt at rest (tiny spread), then flying: no window is judged
+    /// until a longest window of flight has been learnt, so the rest's
+    /// spread raises no alarm; then judging resumes, calibrated on flight.
+    #[test]
+    fn a_spread_learnt_at_rest_does_not_judge_flight() {
+        let cfg = AttitudeRateConfig::<f64>::flight();
+        let mut ar = AttitudeRate::<f64>::new(cfg.alpha());
+        let mut n = Noise(21);
+        let still = |_: f64| Vector3::zeros();
+        let b = Vector3::new(0.3, -0.2, 0.1) * DEG;
+        let mut q = fly(
+            &mut ar,
+            &cfg,
+            UnitQuaternion::identity(),
+            0.0,
+            40.0,
+            still,
+            |_| b,
+            &mut n,
+            0.001,
+            0.01 * DEG,
+        );
+        ar.start_judging();
+        q = fly(
+            &mut ar,
+            &cfg,
+            q,
+            40.0,
+            5.0,
+            still,
+            |_| b,
+            &mut n,
+            0.001,
+            0.01 * DEG,
+        );
+        assert!(
+            ar.detail.ratio.iter().all(|r| *r > 0.0),
+            "{:?}",
+            ar.detail.ratio
+        );
+        // Flight: 20× the gyro noise, 30× the aiding's; its first 10 s
+        // (and the 9.5 s before a block is learnt) are not judged.
+        let mut judged_at = None;
+        for k in 0..60 {
+            q = fly(
+                &mut ar,
+                &cfg,
+                q,
+                45.0 + 0.5 * k as f64,
+                0.5,
+                turning,
+                |_| b,
+                &mut n,
+                0.02,
+                0.3 * DEG,
+            );
+            assert_eq!(ar.detail.flag, [0; 3], "{:?} at {k}", ar.detail.ratio);
+            if judged_at.is_none() && ar.detail.ratio.iter().any(|r| *r > 0.0) {
+                judged_at = Some(0.5 * (k + 1) as f64);
+            }
+        }
+        let t = judged_at.expect("flight never judged");
+        assert!((19.0..=25.0).contains(&t), "{t}");
     }
 
     /// `f32` against `f64` on the same flight: block means within 1e-3
