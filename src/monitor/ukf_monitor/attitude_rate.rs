@@ -476,14 +476,12 @@ impl<T: Real> AttitudeRate<T> {
                 continue;
             };
             // The learnt spread holds for the motion it was learnt at: a
-            // window is judged only if two longest windows of learnt
-            // blocks were at least as active (a variance learnt at rest
-            // says nothing of flight).
-            if self.covered(len) < need {
-                if let Some(u) = uncovered.get_mut(k) {
-                    *u = true;
-                }
-                continue;
+            // window is judged only if one longest window of learnt blocks
+            // was at least as active (a variance learnt at rest says
+            // nothing of flight). Its deviation is still computed: it may
+            // show that a fault has ended (below).
+            if let Some(u) = uncovered.get_mut(k) {
+                *u = self.covered(len) < need;
             }
             for c in 0..3 {
                 let Some((m, _, n)) = self.moments(c) else {
@@ -542,6 +540,12 @@ impl<T: Real> AttitudeRate<T> {
                 let Some((d, lim)) = col(k) else {
                     continue;
                 };
+                // A window more active than anything learnt is not judged,
+                // nor does it stop learning (its ratio means nothing yet:
+                // a spread learnt at rest would otherwise never learn flight).
+                if uncovered.get(k).copied().unwrap_or(true) {
+                    continue;
+                }
                 let r = d.abs() / lim;
                 if let Some(w) = worst.get_mut(c) {
                     *w = w.fmax(r);
