@@ -178,7 +178,7 @@ fn fault_free_flag_events_per_imu() {
 /// the GPS lag fitted finds 7 of the 9 accelerometer steps and, with the
 /// gyro/attitude-aiding test, 7 of the 9 2 °/s gyro steps (14/18; no gyro
 /// step without the test); the flight default (learned inflation, lag 0)
-/// finds no accelerometer step and 8 gyro steps (none without the test);
+/// finds no accelerometer step and all 9 gyro steps (none without the test);
 /// the OTSUKF with the lag fitted three gyro steps.
 #[test]
 fn steps_detected_within_10_s() {
@@ -188,10 +188,7 @@ fn steps_detected_within_10_s() {
         steps(&["--monitor", "ukf", "--velocity-delay", "auto"]),
         [[x, x, x, x, x, o], [x, x, o, x, x, o], [x, x, o, x, x, x]]
     );
-    assert_eq!(
-        steps(&["--monitor", "ukf"]),
-        [[o, o, o, x, x, x], [o, o, o, x, x, o], [o, o, o, x, x, x]]
-    );
+    assert_eq!(steps(&["--monitor", "ukf"]), [[o, o, o, x, x, x]; 3]);
     // The OTSUKF with the lag fitted (1 event per IMU): 3/18.
     assert_eq!(
         steps(&["--monitor", "otsukf", "--velocity-delay", "auto"]),
