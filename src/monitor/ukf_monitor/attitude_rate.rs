@@ -57,6 +57,16 @@
 //! judges once it has `min_dof` degrees of freedom and the offset two
 //! longest windows of blocks.
 //!
+//! **Motion cover.** The spread learnt holds for the motion it was learnt
+//! at: a vehicle at rest shows a tiny one, and judging flight against it
+//! raised alarms at take-off (log171 from 48 s, on the ground until 80 s:
+//! ratios 1.4–3.2 at the first decisions). Each block's mean squared rate
+//! is kept, the learnt blocks are counted per half-decade of it, and a
+//! window is judged only if at least one longest window of learnt blocks
+//! was as active as its mean; until then it neither decides nor stops
+//! learning (so flight gets learnt), and a flag it raised is kept, not
+//! cleared (not judged is not nominal).
+//!
 //! **No learning during a fault.** A block is learnt (offset, `v_B`, and
 //! the windows that end at it) only once every decision that saw it has
 //! been made, and only on the channels where all of those stayed below
