@@ -1,5 +1,5 @@
 //! Settings of the UKF monitor's gyro/attitude-aiding consistency test
-//! (issue 15, `ukf_monitor/attitude_rate.rs`): the gyro integrated between
+//! (issue 15, `ukf_monitor/attitude_rate/`): the gyro integrated between
 //! attitude-aiding epochs against the aiding's own rotation, summed over
 //! seconds, for gyro biases the ten-epoch innovation windows cannot tell
 //! from an aiding whose errors wander (a real autopilot's attitude).

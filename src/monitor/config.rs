@@ -229,7 +229,7 @@ pub struct UkfMonitorConfig<T> {
     /// OTSUKF's value, on in `replay`'s flight profile.
     pub fault_psd: Option<ImuVec<T>>,
     /// The gyro/attitude-aiding consistency test (issue 15,
-    /// `ukf_monitor/attitude_rate.rs`): the gyro integrated between
+    /// `ukf_monitor/attitude_rate/`): the gyro integrated between
     /// attitude epochs against the aiding's rotation, summed over windows
     /// of seconds and tested against the spread this flight has shown at
     /// those lengths, for gyro biases against an aiding whose errors

@@ -119,7 +119,7 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     heading: heading::HeadingEstimator<T>,
     /// The tracking fault estimate (`fault_track.rs`).
     tracker: fault_track::FaultTracker<T>,
-    /// The gyro/attitude-aiding consistency test (`attitude_rate.rs`).
+    /// The gyro/attitude-aiding consistency test (`attitude_rate/`).
     #[cfg(feature = "attitude-rate-test")]
     att_rate: attitude_rate::AttitudeRate<T>,
     history: heapless::HistoryBuf<StateVec<T>, { MAX_DELAY_STEPS + 1 }>,
