@@ -3,10 +3,12 @@
 # real flight (ArduPilot log171, the extracts shipped in tests/data: SPEC §10
 # IMU CSV + GPS velocity + attitude, mapped by `replay`), cut at 235 s, each IMU monitored alone. Prints the
 # fault-free flag events per IMU, then for every IMU and axis a 2 °/s gyro
-# step and a 0.5 m/s² accelerometer step (positive, 150–170 s) and whether
+# step and a 0.5 m/s² accelerometer step (default positive, 150–170 s) and whether
 # it was flagged with the right sign within 10 s ("0.0s": already flagged
 # at onset). Needs python3.
-# Step sizes: ACC (m/s², default 0.5) and GYRO_DEG (°/s, default 2).
+# Step sizes: ACC (m/s², default 0.5) and GYRO_DEG (°/s, default 2); ONSET
+# (s, default 150; the step lasts 20 s), SIGN (1 or -1, default 1) and FROM
+# (start of the replay, s, default 80).
 # Usage: scripts/single-imu-log171.sh [ukf|otsukf] [extra replay options]
 #   e.g. scripts/single-imu-log171.sh ukf --aiding-delay auto --heading-offset auto
 # DATA (default tests/data) and IMU_CSV (default $DATA/ap_log171_3imu.csv)
@@ -15,6 +17,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 MON=${1:-ukf}
 ACC=${ACC:-0.5}
+ONSET=${ONSET:-150}
+FROM=${FROM:-80}
+SIGN=${SIGN:-1}
 GYRO=$(python3 -c "import math; print(math.radians(${GYRO_DEG:-2}))")
 shift || true
 DATA=${DATA:-tests/data}
@@ -24,12 +29,12 @@ cargo build -q -p imu-fdi-cli --release --bin imu-fdi-sim
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 LOG=(replay "$IMU_CSV" --gnss "$DATA/ap_log171_gps_vel_ned.csv"
-  --att "$DATA/ap_log171_attitude_quat.csv" --from 80 --to 235 --monitor "$MON" "$@")
+  --att "$DATA/ap_log171_attitude_quat.csv" --from "$FROM" --to 235 --monitor "$MON" "$@")
 $BIN "${LOG[@]}" --json 2>/dev/null >"$TMP/free.json"
-python3 - "$TMP/free.json" <<'PY'
+python3 - "$TMP/free.json" "$FROM" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1]))
-print(f"{s['monitor']}: log171 80–235 s, monitoring from {s['monitoring_from_s']} s")
+print(f"{s['monitor']}: log171 {sys.argv[2]}–235 s, monitoring from {s['monitoring_from_s']} s")
 if s.get("aiding_delay_s"):
     print("  aiding delay (%s): %s s; heading offset (%s): %s deg" % (
         s["aiding_delay_mode"], ", ".join("%.3f" % d for d in s["aiding_delay_s"]),
@@ -57,18 +62,18 @@ gyro = [$GYRO, 0.0, 0.0]
 f_unit = [1.0, 0.017453292519943295]
 [[faults]]
 channel = $k
-start = 150.0
-end = 170.0
+start = $ONSET
+end = $(python3 -c "print(${ONSET} + 20.0)")
 kind = "E1"
-sign = 1.0
+sign = $SIGN
 TOML
     $BIN "${LOG[@]}" --faults "$TMP/f.toml" --inject-imu $imu --json 2>/dev/null >"$TMP/inj.json"
     r=$(python3 -c '
 import json,sys
 s=json.load(open(sys.argv[1])); i=6*int(sys.argv[2])+int(sys.argv[3])
-c=s["channels"][i]; d=c["first_correct_s"]
-print(("%s %.1fs" % (c["channel"].split("_")[-1], d-150.0)) if d is not None and d-150.0<=10.0 else "%s MISS" % c["channel"].split("_")[-1])
-' "$TMP/inj.json" $imu $k)
+c=s["channels"][i]; d=c["first_correct_s"]; t0=float(sys.argv[4])
+print(("%s %.1fs" % (c["channel"].split("_")[-1], d-t0)) if d is not None and d-t0<=10.0 else "%s MISS" % c["channel"].split("_")[-1])
+' "$TMP/inj.json" $imu $k $ONSET)
     line+=" $r"; n=$((n+1)); [[ $r == *MISS* ]] || ok=$((ok+1))
   done
   echo "$line"

@@ -4,6 +4,7 @@ use crate::detect::{Detector, Statistic};
 use crate::filter::{SigmaParams, SigmaWeights};
 use crate::math::Real;
 use crate::model::{AidingKind, ImuNoisePsd, ImuVec, MeasVec, StateVec, G0};
+use crate::monitor::AttitudeRateConfig;
 
 /// A configuration the monitor cannot run with. Its `Display` names the
 /// field.
@@ -26,7 +27,8 @@ pub enum ConfigError {
     /// (`estimate_aiding_delay` and `estimate_heading_offset`:
     /// `aiding-estimators`; `fault_psd`: `fault-tracking`; M2 `aiding`:
     /// `m2-aiding`; a `detector` other than GLR: `alt-detectors`; a
-    /// `statistic` other than `Normalized`: `t-statistics`).
+    /// `statistic` other than `Normalized`: `t-statistics`;
+    /// `attitude_rate`: `attitude-rate-test`).
     NotCompiled(&'static str),
 }
 
@@ -49,6 +51,7 @@ impl ConfigError {
             Self::NotCompiled("aiding") => Some("m2-aiding"),
             Self::NotCompiled("detector") => Some("alt-detectors"),
             Self::NotCompiled("statistic") => Some("t-statistics"),
+            Self::NotCompiled("attitude_rate") => Some("attitude-rate-test"),
             Self::NotCompiled(_) => Some("aiding-estimators"),
             _ => None,
         }
@@ -225,6 +228,16 @@ pub struct UkfMonitorConfig<T> {
     /// (docs/performance.md); [`Self::fault_tracking_psd`] is the
     /// OTSUKF's value, on in `replay`'s flight profile.
     pub fault_psd: Option<ImuVec<T>>,
+    /// The gyro/attitude-aiding consistency test (issue 15,
+    /// `ukf_monitor/attitude_rate/`): the gyro integrated between
+    /// attitude epochs against the aiding's rotation, summed over windows
+    /// of seconds and tested against the spread this flight has shown at
+    /// those lengths, for gyro biases against an aiding whose errors
+    /// wander (a real autopilot's attitude). Its flags are added to the
+    /// ten-epoch test's on the gyro channels. Off in the presets; on in
+    /// `replay`'s flight profile ([`AttitudeRateConfig::flight`]). Needs
+    /// the feature `attitude-rate-test`.
+    pub attitude_rate: Option<AttitudeRateConfig<T>>,
     /// An aiding channel silent for this long is "not monitored", s.
     pub aiding_timeout_s: T,
     /// Identical consecutive IMU samples before the IMU is reported frozen.
@@ -315,6 +328,7 @@ impl<T: Real> UkfMonitorConfig<T> {
             estimate_aiding_delay: false,
             estimate_heading_offset: false,
             fault_psd: None,
+            attitude_rate: None,
             aiding_timeout_s: T::lit(1.0),
             frozen_samples: 20,
         }
@@ -483,6 +497,12 @@ impl<T: Real> UkfMonitorConfig<T> {
         if !cfg!(feature = "fault-tracking") && self.fault_psd.is_some() {
             return Err(ConfigError::NotCompiled("fault_psd"));
         }
+        if let Some(ar) = self.attitude_rate.as_ref() {
+            if !cfg!(feature = "attitude-rate-test") {
+                return Err(ConfigError::NotCompiled("attitude_rate"));
+            }
+            ar.check().map_err(ConfigError::OutOfRange)?;
+        }
         Ok(())
     }
 }
@@ -499,6 +519,7 @@ mod tests {
             ("estimate_heading_offset", "aiding-estimators"),
             ("detector", "alt-detectors"),
             ("statistic", "t-statistics"),
+            ("attitude_rate", "attitude-rate-test"),
         ] {
             assert_eq!(ConfigError::NotCompiled(field).feature(), Some(feature));
         }
@@ -543,6 +564,9 @@ mod tests {
             c.statistic = st;
             check(c, "statistic", cfg!(feature = "t-statistics"));
         }
+        let mut c = UkfMonitorConfig::auv();
+        c.attitude_rate = Some(AttitudeRateConfig::flight());
+        check(c, "attitude_rate", cfg!(feature = "attitude-rate-test"));
         assert_eq!(UkfMonitorConfig::<f64>::auv().validate(), Ok(()));
     }
 }

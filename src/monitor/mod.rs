@@ -2,6 +2,7 @@
 //! learning, drift tracking, detection and estimation in one periodic `step`.
 
 mod align;
+mod attitude_rate_config;
 mod config;
 mod input;
 mod otsukf_monitor;
@@ -11,6 +12,9 @@ mod task;
 mod ukf_monitor;
 
 pub use align::align_state;
+pub use attitude_rate_config::{
+    AttitudeRateConfig, AttitudeRateDetail, ATTITUDE_RATE_LENGTHS, ATTITUDE_RATE_MAX_BLOCKS,
+};
 pub use config::{ConfigError, UkfMonitorConfig};
 pub use otsukf_monitor::{OtsukfConfig, OtsukfMonitor};
 pub use report::{

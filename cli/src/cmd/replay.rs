@@ -95,8 +95,21 @@ pub(crate) struct Args {
     /// sample is then fused at the row it describes. Either monitor.
     #[arg(long, value_parser = parse_delay, default_value = "0")]
     velocity_delay: imu_fdi_cli::eval::replay::AidingDelay,
+    /// Flight profile, UKF monitor: the gyro/attitude-aiding consistency
+    /// test (the gyro integrated between attitude epochs against the
+    /// aiding's rotation over 2.5–10 s windows, their spread learnt on the
+    /// flight); `off` leaves the gyros to the innovation windows alone.
+    #[arg(long, value_enum, default_value_t = OnOff::On)]
+    attitude_rate: OnOff,
     #[command(flatten)]
     detect: DetectOpts,
+}
+
+/// `--attitude-rate`.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum OnOff {
+    On,
+    Off,
 }
 
 /// `--heading-offset`.
@@ -145,6 +158,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         aiding_delay,
         heading_offset,
         velocity_delay,
+        attitude_rate,
         detect,
     } = args;
     let ropts = options("replay", &detect);
@@ -189,6 +203,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         aiding_delay,
         estimate_heading_offset: heading_offset == HeadingArg::Auto,
         velocity_delay,
+        attitude_rate: attitude_rate == OnOff::On,
     };
     // With --json, stdout carries only the JSON object.
     macro_rules! note {

@@ -2,7 +2,7 @@
 //! profile, learning, aiding noise and latencies, the monitor.
 
 use imu_fdi::model::MeasVec;
-use imu_fdi::monitor::UkfMonitorConfig;
+use imu_fdi::monitor::{AttitudeRateConfig, UkfMonitorConfig};
 
 use super::replay_monitor::MonitorKind;
 
@@ -56,6 +56,9 @@ pub struct ReplayOptions {
     /// describes (the log is at hand: the offline equivalent of delayed
     /// fusion at a known lag).
     pub velocity_delay: AidingDelay,
+    /// Flight profile, UKF monitor: run the gyro/attitude-aiding
+    /// consistency test (`UkfMonitorConfig::attitude_rate`, default on).
+    pub attitude_rate: bool,
 }
 
 /// How the UKF monitor treats the aiding's latency
@@ -93,6 +96,7 @@ impl Default for ReplayOptions {
             aiding_delay: AidingDelay::default(),
             estimate_heading_offset: false,
             velocity_delay: AidingDelay::default(),
+            attitude_rate: true,
         }
     }
 }
@@ -125,5 +129,11 @@ pub fn flight_config(
     c.max_innovation_inflation = opts.max_inflation.unwrap_or(25.0);
     // The tracking fault estimate (the window mean lags and is noisy).
     c.fault_psd = Some(UkfMonitorConfig::fault_tracking_psd());
+    // Small gyro biases against an autopilot's wandering attitude: the gyro
+    // against the attitude aiding over windows of seconds, their spread
+    // learnt on this flight (issue 15).
+    if opts.attitude_rate {
+        c.attitude_rate = Some(AttitudeRateConfig::flight());
+    }
     c
 }

@@ -60,14 +60,19 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             }
             Phase::Monitoring => {
                 self.detect(health);
-                let quiet = self.report.status.iter().all(|s| {
-                    !matches!(s, ChannelState::FaultNegative | ChannelState::FaultPositive)
-                }) && self
-                    .report
-                    .detail
-                    .t_statistic
-                    .iter()
-                    .all(|t| t.abs() < self.t_threshold() * T::lit(0.5));
+                self.att_rate_apply();
+                // Not while the gyro/attitude test sees something either: a
+                // slow bias under its threshold is not absorbed.
+                let quiet = self.att_rate_quiet()
+                    && self.report.status.iter().all(|s| {
+                        !matches!(s, ChannelState::FaultNegative | ChannelState::FaultPositive)
+                    })
+                    && self
+                        .report
+                        .detail
+                        .t_statistic
+                        .iter()
+                        .all(|t| t.abs() < self.t_threshold() * T::lit(0.5));
                 let estimate = if quiet && !held { instant(self) } else { None };
                 if let Some(f) = estimate {
                     let k = dt_learn / self.cfg.drift_tau_s;

@@ -16,6 +16,10 @@ use crate::model::{
 };
 use crate::stats::normal_upper_quantile;
 
+#[cfg(feature = "attitude-rate-test")]
+mod attitude_rate;
+#[cfg(not(feature = "attitude-rate-test"))]
+mod attitude_rate_off;
 mod compose;
 mod delay;
 mod detection;
@@ -115,6 +119,9 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     heading: heading::HeadingEstimator<T>,
     /// The tracking fault estimate (`fault_track.rs`).
     tracker: fault_track::FaultTracker<T>,
+    /// The gyro/attitude-aiding consistency test (`attitude_rate/`).
+    #[cfg(feature = "attitude-rate-test")]
+    att_rate: attitude_rate::AttitudeRate<T>,
     history: heapless::HistoryBuf<StateVec<T>, { MAX_DELAY_STEPS + 1 }>,
     report: UkfReport<T>,
 }
@@ -189,6 +196,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             learned_lag: 0,
             heading: heading::HeadingEstimator::new(),
             tracker: fault_track::FaultTracker::new(),
+            #[cfg(feature = "attitude-rate-test")]
+            att_rate: attitude_rate::AttitudeRate::new(
+                cfg.attitude_rate.map_or(0.0, |c| c.alpha()),
+            ),
             history: heapless::HistoryBuf::new(),
             report: UkfReport::default(),
             cfg,
@@ -342,6 +353,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             // sample stands in: better than freezing the state while the
             // vehicle moves, which would flag every channel afterwards.
             let u = if usable { *imu } else { self.prev_imu } - self.nominal_bias;
+            self.att_rate_sample(imu, dt, usable);
             match self.predict(&u, dt) {
                 Ok(reset) => health.covariance_reset |= reset,
                 Err(ModelError::PitchSingularity) => health.pitch_singular = true,
@@ -377,6 +389,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 match self.update(&aiding, &omega) {
                     Ok((rejected, reset)) => {
                         updated = true;
+                        self.att_rate_epoch(&aiding);
                         health.aiding_rejected |= rejected;
                         health.covariance_reset |= reset;
                     }

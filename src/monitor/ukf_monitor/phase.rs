@@ -26,6 +26,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             Some(Phase::Monitoring) => {
                 self.phase = Phase::Monitoring;
                 self.freeze_inflation();
+                self.att_rate_start();
                 // The fault estimate starts from "no fault", as uncertain
                 // as the smallest fault to detect.
                 if self.tracking_on() {
@@ -53,6 +54,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.inflation_sum = [T::zero(); NZ];
         self.inflation_n = [T::zero(); NZ];
         self.inflation = [T::one(); NZ];
+        self.att_rate_reset();
         for w in self.windows.iter_mut() {
             w.clear();
         }

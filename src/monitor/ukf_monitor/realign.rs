@@ -169,6 +169,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         for w in self.windows.iter_mut() {
             w.clear();
         }
+        self.att_rate_clear();
         self.persistence.reset();
         self.stats_holdoff = self.stats_holdoff.max(self.cfg.converge_s);
     }

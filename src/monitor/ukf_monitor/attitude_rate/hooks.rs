@@ -1,0 +1,132 @@
+//! The UKF monitor's side of the gyro/attitude-aiding test: feeding it
+//! the IMU samples and the fused attitude epochs, merging its flags into
+//! the report, and resetting it with the monitor.
+
+use nalgebra::Vector3;
+
+use crate::math::Real;
+use crate::model::{ImuVec, Measurement};
+use crate::monitor::ukf_monitor::{UkfMonitor, MAX_NOMINAL_BIAS_FACTOR};
+use crate::monitor::{AttitudeRateDetail, ChannelState, Phase};
+
+impl<T: Real, const W: usize> UkfMonitor<T, W> {
+    /// The test runs (configured; compiled in, as this file is).
+    pub(in crate::monitor::ukf_monitor) fn attitude_rate_on(&self) -> bool {
+        self.cfg.attitude_rate.is_some()
+    }
+
+    /// What the gyro/attitude-aiding consistency test shows (`None` when it
+    /// is off): ratios, flags, estimates, learnt offset, reddening factors
+    /// and degrees of freedom.
+    pub fn attitude_rate_detail(&self) -> Option<AttitudeRateDetail<T>> {
+        self.attitude_rate_on().then_some(self.att_rate.detail)
+    }
+
+    /// One IMU sample (raw) into the interval under way; `usable`: the
+    /// sample was valid and the statistics are not held (else the interval
+    /// is dropped).
+    pub(in crate::monitor::ukf_monitor) fn att_rate_sample(
+        &mut self,
+        imu: &ImuVec<T>,
+        dt: T,
+        usable: bool,
+    ) {
+        if !self.attitude_rate_on() {
+            return;
+        }
+        let learning = matches!(self.phase, Phase::Learning | Phase::Monitoring);
+        if usable && learning && self.stats_holdoff <= T::zero() {
+            let rate: Vector3<T> = imu.fixed_rows::<3>(3).into_owned();
+            self.att_rate.integrate(&rate, dt);
+        } else {
+            self.att_rate.invalidate();
+        }
+    }
+
+    /// After an aiding update: an attitude epoch the UKF fused closes the
+    /// interval; one it rejected is skipped (the gyro integrates on).
+    pub(in crate::monitor::ukf_monitor) fn att_rate_epoch(&mut self, aiding: &Measurement<T>) {
+        let Some(cfg) = self.cfg.attitude_rate else {
+            return;
+        };
+        if !matches!(self.phase, Phase::Learning | Phase::Monitoring)
+            || self.stats_holdoff > T::zero()
+        {
+            self.att_rate.invalidate();
+            return;
+        }
+        let fused = self
+            .report
+            .detail
+            .diag
+            .iter()
+            .skip(3)
+            .all(|d| d.available && d.fused);
+        if !fused || !aiding.available.iter().skip(3).all(|a| *a) {
+            return;
+        }
+        let att = aiding.z.fixed_rows::<3>(3);
+        let euler = [att.x, att.y, att.z];
+        let cap = self
+            .cfg
+            .max_nominal_bias
+            .unwrap_or_else(|| self.cfg.min_fault * T::lit(MAX_NOMINAL_BIAS_FACTOR));
+        let bound: Vector3<T> = cap.fixed_rows::<3>(3).into_owned();
+        let external =
+            self.phase == Phase::Monitoring
+                && self.report.status.iter().any(|s| {
+                    matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative)
+                });
+        self.att_rate
+            .epoch(&cfg, euler, &bound, self.cfg.aiding_timeout_s, external);
+    }
+
+    /// Adds the test's flags to the report: a gyro channel the UKF finds
+    /// healthy is reported faulty while the test flags it, with the window
+    /// mean as its estimate.
+    pub(in crate::monitor::ukf_monitor) fn att_rate_apply(&mut self) {
+        if !self.attitude_rate_on() {
+            return;
+        }
+        let d = &self.att_rate.detail;
+        for ((st, e), (f, m)) in self
+            .report
+            .status
+            .iter_mut()
+            .zip(self.report.fault_estimate.iter_mut())
+            .skip(3)
+            .zip(d.flag.iter().zip(d.estimate.iter()))
+        {
+            if *f == 0 || !matches!(st, ChannelState::Healthy) {
+                continue;
+            }
+            *st = if *f > 0 {
+                ChannelState::FaultPositive
+            } else {
+                ChannelState::FaultNegative
+            };
+            *e = *m;
+        }
+    }
+
+    /// The test is quiet (every ratio below half its threshold) or off: the
+    /// UKF's drift tracker may learn.
+    pub(in crate::monitor::ukf_monitor) fn att_rate_quiet(&self) -> bool {
+        !self.attitude_rate_on() || self.att_rate.quiet(T::lit(0.5))
+    }
+
+    /// Forgets the intervals and windows (re-alignment).
+    pub(in crate::monitor::ukf_monitor) fn att_rate_clear(&mut self) {
+        self.att_rate.clear_windows();
+    }
+
+    /// Starts afresh (learning restarted).
+    pub(in crate::monitor::ukf_monitor) fn att_rate_reset(&mut self) {
+        self.att_rate.reset();
+    }
+
+    /// Decisions start (monitoring).
+    pub(in crate::monitor::ukf_monitor) fn att_rate_start(&mut self) {
+        self.att_rate.start_judging();
+    }
+}

@@ -1,0 +1,693 @@
+//! The gyro/attitude-aiding consistency test (issue 15,
+//! `UkfMonitorConfig::attitude_rate`).
+//!
+//! **Why.** The ten-epoch innovation windows see a gyro bias `b` only
+//! through the attitude innovations, whose per-epoch SNR is about
+//! `b / σ` with σ the aliased vibration of one IMU sample (6–12 °/s on
+//! log171): a 2 °/s step needs 5–10 s of evidence, which a 1-s window and
+//! a learnt inflation built for it never collect. This test compares the
+//! gyro with the attitude aiding directly, over seconds.
+//!
+//! **Residual.** Between two attitude-aiding epochs the raw gyro is
+//! integrated as a quaternion, one exact rotation `exp(ω·dt)` per IMU
+//! sample (rates reach 200 °/s in Acro: no small-angle shortcut across an
+//! interval), giving the body rotation `ΔR_g`; the aiding gives
+//! `ΔR_a = R_a(t₀)ᵀ R_a(t₁)`. The residual `log(ΔR_aᵀ ΔR_g)` (body axes,
+//! logarithm by `atan2`, exact in `f32` for small angles), mapped by the
+//! inverse right Jacobian of the gyro's rotation, is `b·Δt` to first order
+//! in `b` at any rate, plus the aiding's error at `t₁` minus that at `t₀`. Summed
+//! over a block or a window the aiding errors telescope (only the ends
+//! remain) while a bias adds up, so the window mean is `b` plus the
+//! gyro's own noise and `(e(t) − e(t−T))/T`. A constant heading offset of
+//! the aiding cancels exactly in `ΔR_a`; a constant aiding lag leaves
+//! only end terms, learnt with the variance. The raw gyro is used, not
+//! the nominal-bias-corrected one, so that the UKF's drift tracker (gated
+//! by the UKF's own test) cannot absorb a slow fault this test sees; the
+//! offset is learnt here instead.
+//!
+//! **Blocks and windows.** Residuals are summed over blocks of `block_s`
+//! (`Σ residual / Σ Δt`, rad/s); windows of `lengths` blocks slide by one
+//! block and are judged at each block's end. An epoch whose attitude the
+//! UKF did not fuse (its gate rejected it) is skipped and the gyro
+//! integrated on to the next one; an interval longer than
+//! `aiding_timeout_s`, an invalid IMU sample or held statistics drop the
+//! interval.
+//!
+//! **What is learnt, and why it gives the false-alarm rate.** Per gyro
+//! channel, from the start of the UKF's learning phase and on while
+//! monitoring: the offset (mean block, the gyro's turn-on bias against the
+//! aiding; clamped to `max_nominal_bias`, or 20 × `min_fault` as the
+//! nominal-bias learner, so a larger power-up bias is reported), the block
+//! variance `v_B` and each length's reddening factor `ρ_L`, the window
+//! variance over `v_B / L`. A 10-s window variance cannot be learnt from
+//! 20–70 s of flight alone (2–7 independent windows), while `v_B` has
+//! 40–140 blocks: `ρ_L` is therefore a posterior with a white-noise prior
+//! (`ρ = 1`) worth `prior_windows` windows, updated by the window means
+//! the flight has shown, each overlapping window counting `1.5/L`
+//! independent ones (the degrees of freedom of the overlapping-batch-means
+//! variance estimator, Meketon & Schmeiser 1984). On log171 the factors
+//! are 0.56–1.13 at 150 s (the 10-s windows' at 10.5–10.8 degrees of
+//! freedom) and 0.44–1.45 at 234 s (18.6–21.6): better than white where
+//! the aiding's errors telescope, up to 1.45 where they wander. The window mean's
+//! variance is `v_B·ρ_L·(1/L + 1/N)` (`N` blocks in the offset), and the
+//! threshold the Student-t quantile of the per-decision probability
+//! [`AttitudeRateConfig::alpha`] at the degrees of freedom
+//! `prior_windows + 1.5·n_L/L` actually learnt: the false-alarm rate
+//! follows from the data and the design rate, not from a margin. A length
+//! judges once it has `min_dof` degrees of freedom and the offset two
+//! longest windows of blocks.
+//!
+//! **Motion cover.** The spread learnt holds for the motion it was learnt
+//! at: a vehicle at rest shows a tiny one, and judging flight against it
+//! raised alarms at take-off (log171 from 48 s, on the ground until 80 s:
+//! ratios 1.4–3.2 at the first decisions). Each block's mean squared rate
+//! is kept, the learnt blocks are counted per half-decade of it, and a
+//! window is judged only if at least one longest window of learnt blocks
+//! was as active as its mean; until then it neither decides nor stops
+//! learning (so flight gets learnt), and a flag it raised is kept, not
+//! cleared (not judged is not nominal).
+//!
+//! **No learning during a fault.** A block is learnt (offset, `v_B`, and
+//! the windows that end at it) only once every decision that saw it has
+//! been made, and only on the channels where all of those stayed below
+//! `learn_below` of the threshold and no channel of the UKF was flagged.
+//!
+//! **Decisions.** The largest score/threshold ratio over the lengths, with
+//! its sign; `confirm` consecutive ratios above 1 with one sign flag the
+//! channel, with the window mean (less the offset) as its size. The flag
+//! holds for `hold` blocks after the last confirmed decision and then
+//! clears. **The way back to nominal**: a 10-s window holds a fault for
+//! 10 s after it has ended, so a longer window's verdict is withdrawn as
+//! soon as the newest shortest window contradicts it (falls short of the
+//! longer window's deviation, in its sign, by more than the shortest
+//! window's own threshold deviation: under a persisting fault that has
+//! the test's per-decision probability); the longer lengths are then
+//! muted on that channel until their windows have flushed, while the
+//! shortest still judges. Without it (a fault small against the shortest
+//! window's spread) the flag clears once no window holds the fault: at
+//! most the longest window plus the hold after the fault ends. Never
+//! stuck: the offset is not learnt meanwhile. A flag is merged into
+//! the UKF's report only on a gyro channel the UKF judges healthy; before
+//! this test can judge it changes nothing (the UKF's test still decides,
+//! and `NotMonitored` stays so).
+
+use nalgebra::{UnitQuaternion, Vector3};
+
+use crate::math::Real;
+use crate::monitor::{
+    AttitudeRateConfig, AttitudeRateDetail, ATTITUDE_RATE_LENGTHS as NL, ATTITUDE_RATE_MAX_BLOCKS,
+};
+use crate::stats::student_t_upper_quantile;
+
+mod hooks;
+mod rotation;
+#[cfg(test)]
+mod tests;
+
+use rotation::{from_euler, inverse_right_jacobian, rotation_exp, rotation_log};
+
+/// Block means kept: a block is learnt once every decision that saw it
+/// has been made (ages up to two longest windows).
+const RING: usize = 2 * ATTITUDE_RATE_MAX_BLOCKS;
+/// Independent windows an overlapping window counts, times its length.
+const OBM_DOF: f64 = 1.5;
+/// Ratio recorded for a block during which the UKF flagged a channel: no
+/// learning from it.
+const EXTERNAL_FLAG_RATIO: f64 = 1e3;
+/// Bins of the learnt blocks' motion (mean squared rate), half a decade
+/// each from 1e-8 (rad/s)² (at rest) up; the last is open.
+const MOTION_BINS: usize = 24;
+const MOTION_LOG10_MIN: f64 = -8.0;
+
+/// The motion bin of a mean squared rate.
+fn motion_bin<T: Real>(m: T) -> usize {
+    let x: f64 = m.to_f64();
+    let l = libm::log10(if x > 1e-30 { x } else { 1e-30 });
+    let b: f64 = libm::floor((l - MOTION_LOG10_MIN) * 2.0);
+    if b <= 0.0 {
+        0
+    } else {
+        (b as usize).min(MOTION_BINS - 1)
+    }
+}
+
+/// The test's state (see the module notes).
+#[derive(Debug, Clone)]
+pub(super) struct AttitudeRate<T> {
+    /// Per-decision false-alarm probability, two-sided.
+    alpha: f64,
+    /// The gyro rotation since the reference epoch, its time and
+    /// `Σ |ω|² dt` over it.
+    gyro: UnitQuaternion<T>,
+    gyro_dt: T,
+    gyro_motion: T,
+    /// `Σ |ω|² dt` of the intervals in the open block.
+    sum_motion: T,
+    /// Mean squared rate of each block in the ring.
+    motion: [T; RING],
+    /// Learnt blocks per motion bin (same forgetting as the moments).
+    motion_hist: [T; MOTION_BINS],
+    /// The aiding attitude the interval started from.
+    reference: Option<UnitQuaternion<T>>,
+    /// Sum of the residuals and of their intervals in the open block.
+    sum: Vector3<T>,
+    sum_dt: T,
+    /// A channel of the UKF was flagged during the open block.
+    external: bool,
+    /// The last `RING` block means, newest at `head − 1`.
+    blocks: [Vector3<T>; RING],
+    /// The largest score/threshold ratio of each block's decision.
+    ratio_at: [Vector3<T>; RING],
+    head: usize,
+    filled: usize,
+    /// Learnt weight (blocks), sum and sum of squares of the block means.
+    n_b: Vector3<T>,
+    s1: Vector3<T>,
+    s2: Vector3<T>,
+    /// Per length: learnt sum of squared window means (about the offset)
+    /// and their count.
+    q_w: [Vector3<T>; NL],
+    n_w: [Vector3<T>; NL],
+    /// Per length and channel: degrees of freedom and Student-t threshold
+    /// last computed (recomputed when the former moves by 1 %).
+    quantile: [[(T, T); 3]; NL],
+    judging: bool,
+    /// Consecutive decisions above threshold per channel, with their sign.
+    run: [(u8, i8); 3],
+    /// Blocks the flag still holds after the last confirmed decision.
+    hold: [u8; 3],
+    /// Blocks the longer lengths stay muted per channel (a fault ended).
+    mute: [u8; 3],
+    /// The length (index) whose decision last confirmed each flag.
+    flag_len: [u8; 3],
+    pub(super) detail: AttitudeRateDetail<T>,
+}
+
+impl<T: Real> AttitudeRate<T> {
+    /// An empty test with per-decision probability `alpha`.
+    pub fn new(alpha: f64) -> Self {
+        Self {
+            alpha,
+            gyro: UnitQuaternion::identity(),
+            gyro_dt: T::zero(),
+            gyro_motion: T::zero(),
+            sum_motion: T::zero(),
+            motion: [T::zero(); RING],
+            motion_hist: [T::zero(); MOTION_BINS],
+            reference: None,
+            sum: Vector3::zeros(),
+            sum_dt: T::zero(),
+            external: false,
+            blocks: [Vector3::zeros(); RING],
+            ratio_at: [Vector3::zeros(); RING],
+            head: 0,
+            filled: 0,
+            n_b: Vector3::zeros(),
+            s1: Vector3::zeros(),
+            s2: Vector3::zeros(),
+            q_w: [Vector3::zeros(); NL],
+            n_w: [Vector3::zeros(); NL],
+            quantile: [[(T::zero(), T::zero()); 3]; NL],
+            judging: false,
+            run: [(0, 0); 3],
+            hold: [0; 3],
+            mute: [0; 3],
+            flag_len: [0; 3],
+            detail: AttitudeRateDetail::default(),
+        }
+    }
+
+    /// Starts afresh (learning restarted).
+    pub fn reset(&mut self) {
+        *self = Self::new(self.alpha);
+    }
+
+    /// Forgets the interval, the open block, the block means and the
+    /// decisions (a re-alignment): what was learnt is kept.
+    pub fn clear_windows(&mut self) {
+        self.invalidate();
+        self.sum = Vector3::zeros();
+        self.sum_dt = T::zero();
+        self.sum_motion = T::zero();
+        self.filled = 0;
+        self.run = [(0, 0); 3];
+        self.hold = [0; 3];
+        self.mute = [0; 3];
+        self.detail.flag = [0; 3];
+        self.detail.estimate = [T::zero(); 3];
+        self.detail.ratio = [T::zero(); 3];
+    }
+
+    /// Decisions start (monitoring).
+    pub fn start_judging(&mut self) {
+        self.judging = true;
+    }
+
+    /// Drops the interval under way: the next attitude epoch only sets the
+    /// reference.
+    pub fn invalidate(&mut self) {
+        self.reference = None;
+        self.gyro = UnitQuaternion::identity();
+        self.gyro_dt = T::zero();
+        self.gyro_motion = T::zero();
+    }
+
+    /// One IMU sample's rotation.
+    pub fn integrate(&mut self, rate: &Vector3<T>, dt: T) {
+        if self.reference.is_some() {
+            self.gyro *= rotation_exp(&(rate * dt));
+            self.gyro_dt += dt;
+            self.gyro_motion += rate.norm_squared() * dt;
+        }
+    }
+
+    /// The largest ratio of the last decision is below `fraction` on every
+    /// channel.
+    pub fn quiet(&self, fraction: T) -> bool {
+        self.detail.ratio.iter().all(|r| *r < fraction)
+    }
+
+    /// An attitude-aiding epoch (ZYX Euler angles of body→NED), closing
+    /// the interval; decides and learns when it closes a block. `bound`:
+    /// the largest offset per gyro channel; `max_interval`: longer
+    /// intervals are dropped; `external`: a UKF channel is flagged.
+    pub fn epoch(
+        &mut self,
+        cfg: &AttitudeRateConfig<T>,
+        euler: [T; 3],
+        bound: &Vector3<T>,
+        max_interval: T,
+        external: bool,
+    ) {
+        let [r, p, y] = euler;
+        let aid = from_euler(r, p, y);
+        self.external |= external;
+        let interval = self.gyro_dt;
+        if let Some(reference) = self.reference {
+            if interval > T::zero() && interval <= max_interval {
+                let d_aid = reference.inverse() * aid;
+                let res = inverse_right_jacobian(
+                    &rotation_log(&self.gyro),
+                    &rotation_log(&(d_aid.inverse() * self.gyro)),
+                );
+                if res.iter().all(|v| v.finite()) {
+                    self.sum += res;
+                    self.sum_dt += interval;
+                    self.sum_motion += self.gyro_motion;
+                }
+            }
+        }
+        self.reference = Some(aid);
+        self.gyro = UnitQuaternion::identity();
+        self.gyro_dt = T::zero();
+        self.gyro_motion = T::zero();
+        // The block closes at its length, within half an interval (ten
+        // 0.1-s intervals sum to a hair under 1 s in floating point).
+        if self.sum_dt > T::zero() && self.sum_dt >= cfg.block_s - interval * T::lit(0.5) {
+            let mean = self.sum / self.sum_dt;
+            let motion = self.sum_motion / self.sum_dt;
+            self.sum = Vector3::zeros();
+            self.sum_dt = T::zero();
+            self.sum_motion = T::zero();
+            self.close_block(cfg, mean, motion, bound);
+        }
+    }
+
+    /// Ring index of the block `age` blocks before the newest.
+    fn slot(&self, age: usize) -> Option<usize> {
+        (age < self.filled).then(|| (self.head + RING - 1 - age) % RING)
+    }
+
+    /// Mean of the `len` blocks ending `age` blocks before the newest.
+    fn window(&self, age: usize, len: usize) -> Option<Vector3<T>> {
+        if len == 0 || self.filled < age + len {
+            return None;
+        }
+        let mut s = Vector3::zeros();
+        for a in age..age + len {
+            s += self.blocks.get(self.slot(a)?)?;
+        }
+        Some(s / T::lit(len as f64))
+    }
+
+    fn close_block(
+        &mut self,
+        cfg: &AttitudeRateConfig<T>,
+        mean: Vector3<T>,
+        motion: T,
+        bound: &Vector3<T>,
+    ) {
+        if let Some(b) = self.blocks.get_mut(self.head) {
+            *b = mean;
+        }
+        if let Some(m) = self.motion.get_mut(self.head) {
+            *m = motion;
+        }
+        let ext = if self.external {
+            T::lit(EXTERNAL_FLAG_RATIO)
+        } else {
+            T::zero()
+        };
+        if let Some(r) = self.ratio_at.get_mut(self.head) {
+            *r = Vector3::from_element(ext);
+        }
+        self.external = false;
+        self.head = (self.head + 1) % RING;
+        self.filled = (self.filled + 1).min(RING);
+        if self.judging {
+            self.decide(cfg, bound);
+        }
+        self.learn(cfg);
+    }
+
+    /// The learnt offset (unclamped mean), block variance and block count
+    /// of channel `c`.
+    fn moments(&self, c: usize) -> Option<(T, T, T)> {
+        let n = *self.n_b.get(c)?;
+        if n <= T::one() {
+            return None;
+        }
+        let m = *self.s1.get(c)? / n;
+        let v = (*self.s2.get(c)? / n - m * m).fmax(T::zero());
+        Some((m, v, n))
+    }
+
+    /// The learnt variance of length `k`'s window mean on channel `c` and
+    /// its degrees of freedom (module notes).
+    fn window_variance(
+        &mut self,
+        cfg: &AttitudeRateConfig<T>,
+        k: usize,
+        c: usize,
+    ) -> Option<(T, T)> {
+        let len = T::lit(f64::from(*cfg.lengths.get(k)?));
+        let (_, vb, n) = self.moments(c)?;
+        if vb <= T::zero() {
+            return None;
+        }
+        let qw = *self.q_w.get(k)?.get(c)?;
+        let nw = *self.n_w.get(k)?.get(c)?;
+        let white = vb / len;
+        let n_eff = nw * T::lit(OBM_DOF) / len;
+        let nu = cfg.prior_windows + n_eff;
+        let rho_hat = if nw > T::zero() {
+            qw / nw / white
+        } else {
+            T::one()
+        };
+        let rho = (cfg.prior_windows + n_eff * rho_hat) / nu;
+        Some((vb * rho * (T::one() / len + T::one() / n), nu))
+    }
+
+    /// The Student-t threshold at `nu` degrees of freedom, cached per
+    /// length and channel.
+    fn threshold(&mut self, k: usize, c: usize, nu: T) -> Option<T> {
+        let alpha = self.alpha;
+        let slot = self.quantile.get_mut(k)?.get_mut(c)?;
+        if (slot.0 - nu).abs() > nu * T::lit(0.01) {
+            let t = student_t_upper_quantile(alpha * 0.5, nu.to_f64()).ok()?;
+            *slot = (nu, T::lit(t));
+        }
+        Some(slot.1)
+    }
+
+    /// Scores the newest windows of each length, updates the runs, flags
+    /// and estimates.
+    fn decide(&mut self, cfg: &AttitudeRateConfig<T>, bound: &Vector3<T>) {
+        let longest = usize::from(cfg.lengths[NL - 1]);
+        let need = T::lit(longest as f64);
+        // Per length and channel: the window mean less the offset and the
+        // deviation at threshold (`None`: this length cannot judge yet).
+        let mut judged = [[None::<(T, T)>; 3]; NL];
+        // Lengths whose newest window is more active than what was learnt.
+        let mut uncovered = [false; NL];
+        for (k, len) in cfg.lengths.iter().map(|l| usize::from(*l)).enumerate() {
+            let Some(w) = self.window(0, len) else {
+                continue;
+            };
+            // The learnt spread holds for the motion it was learnt at: a
+            // window is judged only if one longest window of learnt blocks
+            // was at least as active (a variance learnt at rest says
+            // nothing of flight). Its deviation is still computed: it may
+            // show that a fault has ended (below).
+            if let Some(u) = uncovered.get_mut(k) {
+                *u = self.covered(len) < need;
+            }
+            for c in 0..3 {
+                let Some((m, _, n)) = self.moments(c) else {
+                    continue;
+                };
+                // The offset must rest on two longest windows of blocks.
+                if n < T::lit(2.0 * longest as f64) {
+                    continue;
+                }
+                let Some((var, nu)) = self.window_variance(cfg, k, c) else {
+                    continue;
+                };
+                if nu < cfg.min_dof {
+                    continue;
+                }
+                let Some(t) = self.threshold(k, c, nu) else {
+                    continue;
+                };
+                let lim = bound.get(c).copied().unwrap_or_else(T::zero);
+                let off = m.fmax(-lim).fmin(lim);
+                let (Some(wc), Some(slot)) =
+                    (w.get(c), judged.get_mut(k).and_then(|j| j.get_mut(c)))
+                else {
+                    continue;
+                };
+                *slot = Some((*wc - off, var.sqrt_fast() * t));
+            }
+        }
+        let mut best = [T::zero(); 3];
+        let mut sign = [0i8; 3];
+        let mut est = [T::zero(); 3];
+        let mut best_len = [0u8; 3];
+        // Every length's ratio, muted or not: what learning is gated on.
+        let mut worst = [T::zero(); 3];
+        for c in 0..3 {
+            let col = |k: usize| judged.get(k).and_then(|j| j.get(c)).copied().flatten();
+            // A longer window whose deviation the newest shortest window
+            // contradicts (falls short of it, in its sign, by more than the
+            // shortest window's own threshold deviation: a false rejection
+            // has the test's probability) holds a fault that has ended:
+            // the longer lengths are muted on this channel until their
+            // windows have flushed.
+            if let Some((d0, lim0)) = col(0) {
+                let ended = (1..NL).filter_map(col).any(|(d, lim)| {
+                    let s = if d > T::zero() { T::one() } else { -T::one() };
+                    d.abs() > lim && s * (d - d0) > lim0
+                });
+                if ended {
+                    if let Some(m) = self.mute.get_mut(c) {
+                        *m = cfg.lengths[NL - 1];
+                    }
+                }
+            }
+            let muted = self.mute.get(c).is_some_and(|m| *m > 0);
+            for k in 0..NL {
+                let Some((d, lim)) = col(k) else {
+                    continue;
+                };
+                // A window more active than anything learnt is not judged,
+                // nor does it stop learning (its ratio means nothing yet:
+                // a spread learnt at rest would otherwise never learn flight).
+                if uncovered.get(k).copied().unwrap_or(true) {
+                    continue;
+                }
+                let r = d.abs() / lim;
+                if let Some(w) = worst.get_mut(c) {
+                    *w = w.fmax(r);
+                }
+                if muted && k > 0 {
+                    continue;
+                }
+                if let (Some(b), Some(sg), Some(e), Some(bl)) = (
+                    best.get_mut(c),
+                    sign.get_mut(c),
+                    est.get_mut(c),
+                    best_len.get_mut(c),
+                ) {
+                    if r > *b {
+                        *b = r;
+                        *sg = if d > T::zero() { 1 } else { -1 };
+                        *e = d;
+                        *bl = k as u8;
+                    }
+                }
+            }
+            if let Some(m) = self.mute.get_mut(c) {
+                *m = m.saturating_sub(1);
+            }
+        }
+        let hold_blocks = cfg.hold;
+        for c in 0..3 {
+            // A flag raised by a length that cannot judge this window (more
+            // active than anything learnt) is kept as it is: not judged is
+            // not nominal. The withdrawal (a fault that ended) still clears it.
+            let raised_by = self.flag_len.get(c).copied().unwrap_or(0);
+            let blind = self.detail.flag.get(c).is_some_and(|f| *f != 0)
+                && uncovered
+                    .get(usize::from(raised_by))
+                    .copied()
+                    .unwrap_or(false)
+                && best.get(c).is_some_and(|r| *r <= T::one())
+                && self.mute.get(c).is_none_or(|m| *m == 0);
+            if blind {
+                continue;
+            }
+            let (Some(r), Some(sg), Some(run), Some(hold), Some(flag), Some(e), Some(out)) = (
+                best.get(c),
+                sign.get(c),
+                self.run.get_mut(c),
+                self.hold.get_mut(c),
+                self.detail.flag.get_mut(c),
+                est.get(c),
+                self.detail.estimate.get_mut(c),
+            ) else {
+                continue;
+            };
+            if *r > T::one() {
+                *run = if run.1 == *sg {
+                    (run.0.saturating_add(1), *sg)
+                } else {
+                    (1, *sg)
+                };
+            } else {
+                *run = (0, 0);
+            }
+            if run.0 >= cfg.confirm {
+                *flag = run.1;
+                *hold = hold_blocks;
+                *out = *e;
+                if let (Some(fl), Some(bl)) = (self.flag_len.get_mut(c), best_len.get(c)) {
+                    *fl = *bl;
+                }
+            } else if *hold > 0 {
+                *hold -= 1;
+            } else {
+                *flag = 0;
+                *out = T::zero();
+            }
+        }
+        if let Some(r) = self.slot(0).and_then(|i| self.ratio_at.get_mut(i)) {
+            for (x, b) in r.iter_mut().zip(worst.iter()) {
+                *x = x.fmax(*b);
+            }
+        }
+        self.detail.ratio = best;
+    }
+
+    /// Learnt blocks (forgetting-weighted) at least as active as the
+    /// newest window of `len` blocks (its mean squared rate's bin or above).
+    fn covered(&self, len: usize) -> T {
+        let mut m = T::zero();
+        for a in 0..len {
+            if let Some(v) = self.slot(a).and_then(|i| self.motion.get(i)) {
+                m += *v;
+            }
+        }
+        let b = motion_bin(m / T::lit(len.max(1) as f64));
+        self.motion_hist
+            .iter()
+            .skip(b)
+            .fold(T::zero(), |s, h| s + *h)
+    }
+
+    /// Learns the block `longest − 1` blocks back (every decision that saw
+    /// it has been made) and the windows that end at it, on the channels
+    /// where every decision that saw any of their blocks stayed below
+    /// `learn_below`.
+    fn learn(&mut self, cfg: &AttitudeRateConfig<T>) {
+        let longest = usize::from(cfg.lengths[NL - 1]);
+        let age = longest - 1;
+        let Some(block) = self.slot(age).and_then(|i| self.blocks.get(i)).copied() else {
+            return;
+        };
+        let mut worst = Vector3::<T>::zeros();
+        for a in 0..(age + longest).min(self.filled) {
+            if let Some(r) = self.slot(a).and_then(|i| self.ratio_at.get(i)) {
+                worst = worst.sup(r);
+            }
+        }
+        let keep = T::one() - T::one() / cfg.memory_blocks;
+        let motion = self
+            .slot(age)
+            .and_then(|i| self.motion.get(i))
+            .copied()
+            .unwrap_or_else(T::zero);
+        let mut windows = [None; NL];
+        for (w, len) in windows.iter_mut().zip(cfg.lengths.iter()) {
+            *w = self.window(age, usize::from(*len));
+        }
+        for c in 0..3 {
+            if !worst.get(c).is_some_and(|r| *r < cfg.learn_below) {
+                continue;
+            }
+            let (Some(n), Some(s1), Some(s2), Some(b)) = (
+                self.n_b.get_mut(c),
+                self.s1.get_mut(c),
+                self.s2.get_mut(c),
+                block.get(c),
+            ) else {
+                continue;
+            };
+            *n = *n * keep + T::one();
+            *s1 = *s1 * keep + *b;
+            *s2 = *s2 * keep + *b * *b;
+            let mean = *s1 / *n;
+            for ((q, nw), w) in self
+                .q_w
+                .iter_mut()
+                .zip(self.n_w.iter_mut())
+                .zip(windows.iter())
+            {
+                let (Some(q), Some(nw), Some(wc)) = (
+                    q.get_mut(c),
+                    nw.get_mut(c),
+                    w.as_ref().and_then(|w| w.get(c)),
+                ) else {
+                    continue;
+                };
+                let d = *wc - mean;
+                *q = *q * keep + d * d;
+                *nw = *nw * keep + T::one();
+            }
+        }
+        // The motion the learnt spread holds for: the block counts if any
+        // channel learnt it.
+        if (0..3).any(|c| worst.get(c).is_some_and(|r| *r < cfg.learn_below)) {
+            let bin = motion_bin(motion);
+            for (k, h) in self.motion_hist.iter_mut().enumerate() {
+                *h = *h * keep + if k == bin { T::one() } else { T::zero() };
+            }
+        }
+        // What the report shows of the learnt state.
+        let lengths = cfg.lengths;
+        for c in 0..3 {
+            let Some((m, _, _)) = self.moments(c) else {
+                continue;
+            };
+            if let Some(o) = self.detail.offset.get_mut(c) {
+                *o = m;
+            }
+            for k in 0..NL {
+                let Some((var, nu)) = self.window_variance(cfg, k, c) else {
+                    continue;
+                };
+                let Some((_, vb, n)) = self.moments(c) else {
+                    continue;
+                };
+                let len = T::lit(f64::from(lengths.get(k).copied().unwrap_or(1)));
+                let rho = var / (vb * (T::one() / len + T::one() / n));
+                if let Some(d) = self.detail.reddening.get_mut(k).and_then(|d| d.get_mut(c)) {
+                    *d = rho;
+                }
+                if let Some(d) = self.detail.dof.get_mut(k).and_then(|d| d.get_mut(c)) {
+                    *d = nu;
+                }
+            }
+        }
+    }
+}
