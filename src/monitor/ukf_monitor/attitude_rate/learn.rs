@@ -1,0 +1,120 @@
+//! The attitude-rate test's gated learning: offset, block variance,
+//! reddening per length, and the motion the learnt blocks cover.
+
+use nalgebra::Vector3;
+
+use super::*;
+
+impl<T: Real> AttitudeRate<T> {
+    /// Learnt blocks (forgetting-weighted) at least as active as the
+    /// newest window of `len` blocks (its mean squared rate's bin or above).
+    pub(super) fn covered(&self, len: usize) -> T {
+        let mut m = T::zero();
+        for a in 0..len {
+            if let Some(v) = self.slot(a).and_then(|i| self.motion.get(i)) {
+                m += *v;
+            }
+        }
+        let b = motion_bin(m / T::lit(len.max(1) as f64));
+        self.motion_hist
+            .iter()
+            .skip(b)
+            .fold(T::zero(), |s, h| s + *h)
+    }
+
+    /// Learns the block `longest − 1` blocks back (every decision that saw
+    /// it has been made) and the windows that end at it, on the channels
+    /// where every decision that saw any of their blocks stayed below
+    /// `learn_below`.
+    pub(super) fn learn(&mut self, cfg: &AttitudeRateConfig<T>) {
+        let longest = usize::from(cfg.lengths[NL - 1]);
+        let age = longest - 1;
+        let Some(block) = self.slot(age).and_then(|i| self.blocks.get(i)).copied() else {
+            return;
+        };
+        let mut worst = Vector3::<T>::zeros();
+        for a in 0..(age + longest).min(self.filled) {
+            if let Some(r) = self.slot(a).and_then(|i| self.ratio_at.get(i)) {
+                worst = worst.sup(r);
+            }
+        }
+        let keep = T::one() - T::one() / cfg.memory_blocks;
+        let motion = self
+            .slot(age)
+            .and_then(|i| self.motion.get(i))
+            .copied()
+            .unwrap_or_else(T::zero);
+        let mut windows = [None; NL];
+        for (w, len) in windows.iter_mut().zip(cfg.lengths.iter()) {
+            *w = self.window(age, usize::from(*len));
+        }
+        for c in 0..3 {
+            if !worst.get(c).is_some_and(|r| *r < cfg.learn_below) {
+                continue;
+            }
+            let (Some(n), Some(s1), Some(s2), Some(b)) = (
+                self.n_b.get_mut(c),
+                self.s1.get_mut(c),
+                self.s2.get_mut(c),
+                block.get(c),
+            ) else {
+                continue;
+            };
+            *n = *n * keep + T::one();
+            *s1 = *s1 * keep + *b;
+            *s2 = *s2 * keep + *b * *b;
+            let mean = *s1 / *n;
+            for ((q, nw), w) in self
+                .q_w
+                .iter_mut()
+                .zip(self.n_w.iter_mut())
+                .zip(windows.iter())
+            {
+                let (Some(q), Some(nw), Some(wc)) = (
+                    q.get_mut(c),
+                    nw.get_mut(c),
+                    w.as_ref().and_then(|w| w.get(c)),
+                ) else {
+                    continue;
+                };
+                let d = *wc - mean;
+                *q = *q * keep + d * d;
+                *nw = *nw * keep + T::one();
+            }
+        }
+        // The motion the learnt spread holds for: the block counts if any
+        // channel learnt it.
+        if (0..3).any(|c| worst.get(c).is_some_and(|r| *r < cfg.learn_below)) {
+            let bin = motion_bin(motion);
+            for (k, h) in self.motion_hist.iter_mut().enumerate() {
+                *h = *h * keep + if k == bin { T::one() } else { T::zero() };
+            }
+        }
+        // What the report shows of the learnt state.
+        let lengths = cfg.lengths;
+        for c in 0..3 {
+            let Some((m, _, _)) = self.moments(c) else {
+                continue;
+            };
+            if let Some(o) = self.detail.offset.get_mut(c) {
+                *o = m;
+            }
+            for k in 0..NL {
+                let Some((var, nu)) = self.window_variance(cfg, k, c) else {
+                    continue;
+                };
+                let Some((_, vb, n)) = self.moments(c) else {
+                    continue;
+                };
+                let len = T::lit(f64::from(lengths.get(k).copied().unwrap_or(1)));
+                let rho = var / (vb * (T::one() / len + T::one() / n));
+                if let Some(d) = self.detail.reddening.get_mut(k).and_then(|d| d.get_mut(c)) {
+                    *d = rho;
+                }
+                if let Some(d) = self.detail.dof.get_mut(k).and_then(|d| d.get_mut(c)) {
+                    *d = nu;
+                }
+            }
+        }
+    }
+}
