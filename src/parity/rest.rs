@@ -277,8 +277,8 @@ impl<T: Real, const N: usize> RestCheck<T, N> {
         report
     }
 
-    /// Not at rest: the run and its sums are forgotten.
-    fn moving(&mut self) {
+    /// The open block's sums emptied (the next block starts).
+    fn clear_block(&mut self) {
         self.g0 = None;
         self.a0 = None;
         self.gs = SVector::zeros();
@@ -286,6 +286,11 @@ impl<T: Real, const N: usize> RestCheck<T, N> {
         self.asum = SVector::zeros();
         self.ass = SVector::zeros();
         self.n = 0;
+    }
+
+    /// Not at rest: the run and its sums are forgotten.
+    fn moving(&mut self) {
+        self.clear_block();
         self.run = 0;
         self.centre = None;
         self.sum = SVector::zeros();
@@ -314,14 +319,7 @@ impl<T: Real, const N: usize> RestCheck<T, N> {
             self.moving();
             return None;
         }
-        // Next block.
-        self.g0 = None;
-        self.a0 = None;
-        self.gs = SVector::zeros();
-        self.gss = SVector::zeros();
-        self.asum = SVector::zeros();
-        self.ass = SVector::zeros();
-        self.n = 0;
+        self.clear_block();
         self.run = self.run.saturating_add(1);
         if self.run <= self.cfg.settle_blocks {
             self.state = RestState::Moving;
