@@ -2,7 +2,7 @@
 //! update: nominal-bias learning and drift tracking, the windowed t-tests,
 //! the decision rule and the fault estimates.
 
-use super::{UkfMonitor, MAX_NOMINAL_BIAS_FACTOR};
+use super::UkfMonitor;
 use crate::detect::{
     estimate_as_written_blocks, estimate_as_written_identity, estimate_corrected, test_flags,
     window_evidence, DecisionRule, Statistic, WindowEvidence,
@@ -90,10 +90,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             }
             _ => {}
         }
-        let cap = self
-            .cfg
-            .max_nominal_bias
-            .unwrap_or_else(|| self.cfg.min_fault * T::lit(MAX_NOMINAL_BIAS_FACTOR));
+        let cap = self.nominal_bias_bound();
         for (b, m) in self.nominal_bias.iter_mut().zip(cap.iter()) {
             *b = b.fmax(-*m).fmin(*m);
         }

@@ -263,6 +263,15 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.persistence.reset();
     }
 
+    /// Largest nominal bias per channel the learner may assume: the
+    /// configured turn-on bound, else `MAX_NOMINAL_BIAS_FACTOR × min_fault`.
+    /// Beyond it a bias is a fault from power-on.
+    fn nominal_bias_bound(&self) -> ImuVec<T> {
+        self.cfg
+            .max_nominal_bias
+            .unwrap_or_else(|| self.cfg.min_fault * T::lit(MAX_NOMINAL_BIAS_FACTOR))
+    }
+
     /// One monitor period. Never panics; every anomaly is reported in
     /// [`Report::health`](super::Report::health).
     ///

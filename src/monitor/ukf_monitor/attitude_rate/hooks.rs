@@ -6,7 +6,7 @@ use nalgebra::Vector3;
 
 use crate::math::Real;
 use crate::model::{ImuVec, Measurement};
-use crate::monitor::ukf_monitor::{UkfMonitor, MAX_NOMINAL_BIAS_FACTOR};
+use crate::monitor::ukf_monitor::UkfMonitor;
 use crate::monitor::{AttitudeRateDetail, ChannelState, Phase};
 
 impl<T: Real, const W: usize> UkfMonitor<T, W> {
@@ -67,10 +67,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         let att = aiding.z.fixed_rows::<3>(3);
         let euler = [att.x, att.y, att.z];
-        let cap = self
-            .cfg
-            .max_nominal_bias
-            .unwrap_or_else(|| self.cfg.min_fault * T::lit(MAX_NOMINAL_BIAS_FACTOR));
+        let cap = self.nominal_bias_bound();
         let bound: Vector3<T> = cap.fixed_rows::<3>(3).into_owned();
         let external =
             self.phase == Phase::Monitoring
