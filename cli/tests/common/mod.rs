@@ -1,0 +1,46 @@
+//! Helpers shared by the CLI tests: the binary, its output, temp files
+//! and the replay JSON.
+#![allow(clippy::unwrap_used, clippy::indexing_slicing)] // test code
+// Each test crate uses its own subset of these.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+use std::process::Command;
+
+/// The `imu-fdi-sim` binary built for these tests.
+pub fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_imu-fdi-sim"))
+}
+
+/// Runs the binary with `args`, asserts success, returns stdout.
+pub fn bin_cmd_output(args: &[&str]) -> String {
+    let o = bin().args(args).output().unwrap();
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).to_string()
+}
+
+/// A path in this test process's own temp dir.
+pub fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("imu-fdi-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+/// A JSON file, parsed.
+pub fn json(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// The replay JSON's entry for channel `name`.
+pub fn channel<'a>(s: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
+    s["channels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["channel"] == name)
+        .unwrap()
+}
