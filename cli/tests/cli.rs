@@ -408,3 +408,17 @@ fn plot_writes_png_and_svg_for_a_ukf_scenario_and_for_s4() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown scenario 'nope'"));
 }
+
+#[test]
+fn parity_realistic_rejects_a_step_onset_inside_training() {
+    for bad in ["10", "NaN", "1e9"] {
+        let o = bin()
+            .args(["parity-realistic", "--hours", "0", "--rounds", "1"])
+            .args(["--step-onset", bad])
+            .output()
+            .unwrap();
+        assert!(!o.status.success(), "{bad}");
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(e.contains("--step-onset") && e.lines().count() == 1, "{e}");
+    }
+}

@@ -5,7 +5,7 @@ use anyhow::{bail, Result};
 
 use hal_sim::array::ArrayKind;
 use hal_sim::realistic::RealisticProfile;
-use imu_fdi_cli::eval::parity_campaign::{fault_free_on, steps_on};
+use imu_fdi_cli::eval::parity_campaign::{fault_free_on, steps_on, STEP_ONSET_S, TRAIN_S};
 
 // The arguments of `parity-realistic` (help on `Cmd::ParityRealistic`).
 #[derive(clap::Args)]
@@ -26,6 +26,11 @@ pub(crate) struct Args {
     /// First seed of the step flights (one per case).
     #[arg(long, default_value_t = 1)]
     step_seed: u64,
+    /// Onset of the steps, s of flight (training takes the first 30 s):
+    /// the default judges them in the first minute of monitoring; e.g. 630
+    /// judges them 10 min in, against covariances learnt in flight.
+    #[arg(long, default_value_t = STEP_ONSET_S)]
+    step_onset: f64,
     /// Log the IMUs integrated over each interval (delta angle / delta
     /// velocity, as a FIFO driver hands them) instead of point-sampled.
     #[arg(long)]
@@ -50,6 +55,14 @@ pub(crate) fn run(a: Args) -> Result<()> {
         "both" => &[ArrayKind::Gyro, ArrayKind::Accel],
         other => bail!("--kind: '{other}' is not gyro, accel or both"),
     };
+    // After training (and the first decision), within a day of flight.
+    if !(a.step_onset >= TRAIN_S + 5.0 && a.step_onset <= 86_400.0) {
+        bail!(
+            "--step-onset: {} s is not between {} s (training ends at {TRAIN_S} s) and 86400 s",
+            a.step_onset,
+            TRAIN_S + 5.0
+        );
+    }
     let profile = if a.integrated {
         RealisticProfile::log171().integrated()
     } else {
@@ -105,7 +118,7 @@ pub(crate) fn run(a: Args) -> Result<()> {
                 ArrayKind::Gyro => s.to_radians(),
                 ArrayKind::Accel => s,
             };
-            let r = steps_on(&profile, kind, si, a.rounds, a.step_seed)?;
+            let r = steps_on(&profile, kind, si, a.rounds, a.step_seed, a.step_onset)?;
             let med = r.delays.get(r.delays.len() / 2).copied();
             steps_json.push(serde_json::json!({
                 format!("size_{}", if unit == "°/s" { "deg_s" } else { "m_s2" }): s,
@@ -128,6 +141,7 @@ pub(crate) fn run(a: Args) -> Result<()> {
         kinds_json.push(serde_json::json!({
             "kind": if kind == ArrayKind::Gyro { "gyro" } else { "accel" },
             "integrated": a.integrated,
+            "step_onset_s": a.step_onset,
             "fault_free_h": ff.hours,
             "fault_free_alarm_events": ff.alarm_events,
             "fault_free_alarms_per_hour": ff.alarm_events as f64 / ff.hours.max(1e-9),
