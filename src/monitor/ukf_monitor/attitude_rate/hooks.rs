@@ -19,7 +19,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// is off): ratios, flags, estimates, learnt offset, reddening factors
     /// and degrees of freedom.
     pub fn attitude_rate_detail(&self) -> Option<AttitudeRateDetail<T>> {
-        self.attitude_rate_on().then_some(self.att_rate.detail)
+        self.attitude_rate_on().then_some(self.att_rate.test.detail)
     }
 
     /// One IMU sample (raw) into the interval under way; `usable`: the
@@ -85,31 +85,14 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         if !self.attitude_rate_on() {
             return;
         }
-        let d = &self.att_rate.detail;
-        for ((st, e), (f, m)) in self
-            .report
-            .status
-            .iter_mut()
-            .zip(self.report.fault_estimate.iter_mut())
-            .skip(3)
-            .zip(d.flag.iter().zip(d.estimate.iter()))
-        {
-            if *f == 0 || !matches!(st, ChannelState::Healthy) {
-                continue;
-            }
-            *st = if *f > 0 {
-                ChannelState::FaultPositive
-            } else {
-                ChannelState::FaultNegative
-            };
-            *e = *m;
-        }
+        let d = self.att_rate.test.detail;
+        self.merge_block_flags(3, &d);
     }
 
     /// The test is quiet (every ratio below half its threshold) or off: the
     /// UKF's drift tracker may learn.
     pub(in crate::monitor::ukf_monitor) fn att_rate_quiet(&self) -> bool {
-        !self.attitude_rate_on() || self.att_rate.quiet(T::lit(0.5))
+        !self.attitude_rate_on() || self.att_rate.test.quiet(T::lit(0.5))
     }
 
     /// Forgets the intervals and windows (re-alignment).
@@ -124,6 +107,6 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
 
     /// Decisions start (monitoring).
     pub(in crate::monitor::ukf_monitor) fn att_rate_start(&mut self) {
-        self.att_rate.start_judging();
+        self.att_rate.test.start_judging();
     }
 }

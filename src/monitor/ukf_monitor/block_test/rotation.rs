@@ -1,4 +1,4 @@
-//! Rotations for the gyro/attitude-aiding test: `exp` and `log` of SO(3) on
+//! Rotations for the block tests: `exp` and `log` of SO(3) on
 //! unit quaternions (exact at any angle, `log` by `atan2` so that small
 //! angles keep their digits in `f32`), the inverse right Jacobian, and
 //! ZYX Euler angles to a quaternion.
@@ -58,7 +58,7 @@ pub(crate) fn inverse_right_jacobian<T: Real>(phi: &Vector3<T>, v: &Vector3<T>) 
 }
 
 /// The body→NED rotation of ZYX Euler angles (roll, pitch, yaw).
-pub(super) fn from_euler<T: Real>(roll: T, pitch: T, yaw: T) -> UnitQuaternion<T> {
+pub(crate) fn from_euler<T: Real>(roll: T, pitch: T, yaw: T) -> UnitQuaternion<T> {
     let h = T::lit(0.5);
     let (sr, cr) = (roll * h).sin_cos_fast();
     let (sp, cp) = (pitch * h).sin_cos_fast();

@@ -1,13 +1,13 @@
-//! The attitude-rate test's decisions: scores, runs, flags, withdrawal.
+//! The block test's decisions: scores, runs, flags, withdrawal.
 
 use nalgebra::Vector3;
 
 use super::*;
 
-impl<T: Real> AttitudeRate<T> {
+impl<T: Real> BlockTest<T> {
     /// Scores the newest windows of each length, updates the runs, flags
     /// and estimates.
-    pub(super) fn decide(&mut self, cfg: &AttitudeRateConfig<T>, bound: &Vector3<T>) {
+    pub(super) fn decide(&mut self, cfg: &BlockTestConfig<T>, bound: &Vector3<T>) {
         let longest = usize::from(cfg.lengths[NL - 1]);
         let need = T::lit(longest as f64);
         // Per length and channel: the window mean less the offset and the
