@@ -101,7 +101,7 @@ impl<T: Real> BlockTestConfig<T> {
     pub fn velocity() -> Self {
         Self {
             block_s: T::one(),
-            lengths: [3, 5, 10],
+            lengths: [2, 5, 10],
             lag1_prior: true,
             ..Self::flight()
         }

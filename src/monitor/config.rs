@@ -591,13 +591,24 @@ mod tests {
         let mut c = UkfMonitorConfig::auv();
         c.attitude_rate = Some(AttitudeRateConfig::flight());
         check(c, "attitude_rate", cfg!(feature = "attitude-rate-test"));
-        let mut c = UkfMonitorConfig::auv();
-        c.velocity_increment = Some(VelocityIncrementConfig::velocity());
-        check(
-            c,
-            "velocity_increment",
-            cfg!(feature = "velocity-increment-test"),
-        );
+        if cfg!(feature = "m2-aiding") {
+            let mut c = UkfMonitorConfig::aircraft();
+            c.velocity_increment = Some(VelocityIncrementConfig::velocity());
+            check(
+                c,
+                "velocity_increment",
+                cfg!(feature = "velocity-increment-test"),
+            );
+        }
         assert_eq!(UkfMonitorConfig::<f64>::auv().validate(), Ok(()));
+        // The velocity test integrates against NED GNSS velocity (M2 only).
+        let mut c = UkfMonitorConfig::<f64>::auv();
+        c.velocity_increment = Some(VelocityIncrementConfig::velocity());
+        let want = if cfg!(feature = "velocity-increment-test") {
+            ConfigError::OutOfRange("velocity_increment")
+        } else {
+            ConfigError::NotCompiled("velocity_increment")
+        };
+        assert_eq!(c.validate(), Err(want));
     }
 }

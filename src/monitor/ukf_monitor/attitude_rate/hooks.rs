@@ -6,6 +6,7 @@ use nalgebra::Vector3;
 
 use crate::math::Real;
 use crate::model::{ImuVec, Measurement};
+use crate::monitor::ukf_monitor::block_test::merge_block_flags;
 use crate::monitor::ukf_monitor::UkfMonitor;
 use crate::monitor::{AttitudeRateDetail, ChannelState, Phase};
 
@@ -85,8 +86,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         if !self.attitude_rate_on() {
             return;
         }
-        let d = self.att_rate.test.detail;
-        self.merge_block_flags(3, &d);
+        merge_block_flags(
+            &mut self.report.status,
+            &mut self.report.fault_estimate,
+            3,
+            &mut self.att_rate.test,
+        );
     }
 
     /// The test is quiet (every ratio below half its threshold) or off: the

@@ -62,21 +62,25 @@ impl<T: Real> BlockTest<T> {
         let mut worst = [T::zero(); 3];
         for c in 0..3 {
             let col = |k: usize| judged.get(k).and_then(|j| j.get(c)).copied().flatten();
-            // A longer window whose deviation the newest shortest window
-            // contradicts (falls short of it, in its sign, by more than the
-            // shortest window's own threshold deviation: a false rejection
-            // has the test's probability) holds a fault that has ended:
-            // the longer lengths are muted on this channel until their
-            // windows have flushed.
-            if let Some((d0, lim0)) = col(0) {
-                let ended = (1..NL).filter_map(col).any(|(d, lim)| {
-                    let s = if d > T::zero() { T::one() } else { -T::one() };
-                    d.abs() > lim && s * (d - d0) > lim0
-                });
-                if ended {
-                    if let Some(m) = self.mute.get_mut(c) {
-                        *m = cfg.lengths[NL - 1];
-                    }
+            // A longer window whose deviation the newest window of a
+            // shorter length contradicts (falls short of it, in its sign, by
+            // more than the shorter window's own threshold deviation: a
+            // false rejection has the test's probability) holds a fault that
+            // has ended: the longer lengths are muted on this channel until
+            // their windows have flushed. Any shorter length, not only the
+            // shortest: where the aiding's errors telescope a window's
+            // spread falls as 1/L², and the shortest window's threshold may
+            // exceed the longest's whole deviation.
+            let ended = (1..NL).any(|k| {
+                let Some((d, lim)) = col(k) else {
+                    return false;
+                };
+                let s = if d > T::zero() { T::one() } else { -T::one() };
+                d.abs() > lim && (0..k).filter_map(col).any(|(dj, limj)| s * (d - dj) > limj)
+            });
+            if ended {
+                if let Some(m) = self.mute.get_mut(c) {
+                    *m = cfg.lengths[NL - 1];
                 }
             }
             let muted = self.mute.get(c).is_some_and(|m| *m > 0);
@@ -119,9 +123,16 @@ impl<T: Real> BlockTest<T> {
         for c in 0..3 {
             // A flag raised by a length that cannot judge this window (more
             // active than anything learnt) is kept as it is: not judged is
-            // not nominal. The withdrawal (a fault that ended) still clears it.
+            // not nominal. The withdrawal (a fault that ended) still clears
+            // it, and so does the end of its evidence: once one longest
+            // window has passed since the last confirmed decision, no window
+            // holds a block that raised it (simulated aircraft, the
+            // velocity-increment test learning little between episodes: a
+            // flag kept blind reappeared 11 s after a step had ended).
             let raised_by = self.flag_len.get(c).copied().unwrap_or(0);
-            let blind = self.detail.flag.get(c).is_some_and(|f| *f != 0)
+            let since = self.since_confirm.get(c).copied().unwrap_or(u8::MAX);
+            let blind = since < cfg.lengths[NL - 1]
+                && self.detail.flag.get(c).is_some_and(|f| *f != 0)
                 && uncovered
                     .get(usize::from(raised_by))
                     .copied()
@@ -129,6 +140,9 @@ impl<T: Real> BlockTest<T> {
                 && best.get(c).is_some_and(|r| *r <= T::one())
                 && self.mute.get(c).is_none_or(|m| *m == 0);
             if blind {
+                if let Some(sc) = self.since_confirm.get_mut(c) {
+                    *sc = sc.saturating_add(1);
+                }
                 continue;
             }
             let (Some(r), Some(sg), Some(run), Some(hold), Some(flag), Some(e), Some(out)) = (
@@ -151,7 +165,19 @@ impl<T: Real> BlockTest<T> {
             } else {
                 *run = (0, 0);
             }
+            if let Some(sc) = self.since_confirm.get_mut(c) {
+                *sc = if run.0 >= cfg.confirm {
+                    0
+                } else {
+                    sc.saturating_add(1)
+                };
+            }
             if run.0 >= cfg.confirm {
+                // Confirmed on windows free of the UKF's own flags?
+                if let (Some(cl), Some(m)) = (self.confirmed_clean.get_mut(c), self.ukf_mask.get(c))
+                {
+                    *cl = *m == 0;
+                }
                 *flag = run.1;
                 *hold = hold_blocks;
                 *out = *e;

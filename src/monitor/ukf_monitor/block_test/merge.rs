@@ -1,35 +1,42 @@
 //! A block test's flags into the UKF monitor's report.
 
+use super::BlockTest;
 use crate::math::Real;
-use crate::monitor::ukf_monitor::UkfMonitor;
-use crate::monitor::{BlockTestDetail, ChannelState};
+use crate::model::ImuVec;
+use crate::monitor::ChannelState;
 
-impl<T: Real, const W: usize> UkfMonitor<T, W> {
-    /// Reports the three channels from `first` (0: accelerometer, 3: gyro)
-    /// faulty where the test flags them and the UKF finds them healthy,
-    /// with the test's window mean as the estimate.
-    pub(in crate::monitor::ukf_monitor) fn merge_block_flags(
-        &mut self,
-        first: usize,
-        d: &BlockTestDetail<T>,
-    ) {
-        for ((st, e), (f, m)) in self
-            .report
-            .status
-            .iter_mut()
-            .zip(self.report.fault_estimate.iter_mut())
-            .skip(first)
-            .zip(d.flag.iter().zip(d.estimate.iter()))
-        {
-            if *f == 0 || !matches!(st, ChannelState::Healthy) {
-                continue;
-            }
-            *st = if *f > 0 {
-                ChannelState::FaultPositive
-            } else {
-                ChannelState::FaultNegative
-            };
-            *e = *m;
+/// Reports the three channels from `first` (0: accelerometer, 3: gyro)
+/// faulty where `test` flags them and the UKF finds them healthy, with the
+/// test's window mean as the estimate; a channel the UKF flags itself is
+/// noted (see [`BlockTest::reports`]).
+pub(in crate::monitor::ukf_monitor) fn merge_block_flags<T: Real>(
+    status: &mut [ChannelState; 6],
+    estimate: &mut ImuVec<T>,
+    first: usize,
+    test: &mut BlockTest<T>,
+) {
+    for c in 0..3 {
+        let (Some(st), Some(e)) = (status.get_mut(first + c), estimate.get_mut(first + c)) else {
+            continue;
+        };
+        if matches!(
+            st,
+            ChannelState::FaultPositive | ChannelState::FaultNegative
+        ) {
+            test.note_ukf_flag(c);
         }
+        let d = &test.detail;
+        let (Some(f), Some(m)) = (d.flag.get(c), d.estimate.get(c)) else {
+            continue;
+        };
+        if *f == 0 || !matches!(st, ChannelState::Healthy) || !test.reports(c) {
+            continue;
+        }
+        *st = if *f > 0 {
+            ChannelState::FaultPositive
+        } else {
+            ChannelState::FaultNegative
+        };
+        *e = *m;
     }
 }

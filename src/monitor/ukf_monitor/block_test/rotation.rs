@@ -9,6 +9,7 @@ use crate::math::Real;
 
 /// `log(q)` as a rotation vector, by `atan2` (no `acos` near 1, which
 /// loses half the digits of a small angle in `f32`).
+#[cfg(feature = "attitude-rate-test")] // the gyro test's only
 pub(crate) fn rotation_log<T: Real>(q: &UnitQuaternion<T>) -> Vector3<T> {
     let q = q.quaternion();
     // q and −q are the same rotation: take the short way.
@@ -42,6 +43,7 @@ pub(crate) fn rotation_exp<T: Real>(theta: &Vector3<T>) -> UnitQuaternion<T> {
 /// `log(exp(−φ) ΔR_g) = J_r(φ) δ + O(δ²)`, so this maps the residual back
 /// to the bias exactly to first order at any rate (at 200 °/s over 0.1 s
 /// `J_r` turns a bias by 10°).
+#[cfg(feature = "attitude-rate-test")] // the gyro test's only
 pub(crate) fn inverse_right_jacobian<T: Real>(phi: &Vector3<T>, v: &Vector3<T>) -> Vector3<T> {
     let th2 = phi.norm_squared();
     // 1/θ² − (1 + cos θ)/(2θ sin θ), by its series below 0.1 rad (the

@@ -6,6 +6,7 @@ use nalgebra::Vector3;
 
 use crate::math::Real;
 use crate::model::{ImuVec, Measurement};
+use crate::monitor::ukf_monitor::block_test::merge_block_flags;
 use crate::monitor::ukf_monitor::UkfMonitor;
 use crate::monitor::{ChannelState, Phase, VelocityIncrementDetail};
 
@@ -93,8 +94,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// the window mean as its estimate.
     pub(in crate::monitor::ukf_monitor) fn vel_inc_apply(&mut self) {
         if self.vel_inc_on() {
-            let d = self.vel_inc.test.detail;
-            self.merge_block_flags(0, &d);
+            merge_block_flags(
+                &mut self.report.status,
+                &mut self.report.fault_estimate,
+                0,
+                &mut self.vel_inc.test,
+            );
         }
     }
 

@@ -193,11 +193,14 @@ fn a_step_is_flagged_with_its_size_and_the_flag_clears_after_it() {
         t += 1.0;
         if found.is_none() && vi.test.detail.flag == [1, 0, 0] {
             found = Some(t - onset);
-            let e = vi.test.detail.estimate[0];
-            assert!((e - 0.5).abs() < 0.15, "estimate {e}");
         }
         assert!(vi.test.detail.flag[1..] == [0, 0], "y/z flagged at {t} s");
     }
+    // Its size once every window holds it (the first flag may come from a
+    // window that straddles the onset).
+    assert_eq!(vi.test.detail.flag, [1, 0, 0]);
+    let e = vi.test.detail.estimate[0];
+    assert!((e - 0.5).abs() < 0.1, "estimate {e}");
     let found = found.expect("step not flagged");
     assert!(found <= 5.0, "flagged after {found} s");
     let mut cleared = None;
