@@ -218,5 +218,5 @@ fn a_step_is_flagged_with_its_size_and_the_flag_clears_after_it() {
         }
     }
     let cleared = cleared.expect("flag never cleared");
-    assert!(cleared <= 12.0, "cleared {cleared} s after the step");
+    assert!(cleared <= 8.0, "cleared {cleared} s after the step");
 }
