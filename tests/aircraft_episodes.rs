@@ -193,18 +193,25 @@ fn aircraft_velocity_increment_test() {
         assert_targets(&format!("aircraft + both block tests, {name}"), &t);
         assert_eq!(t.detected, t.episodes);
     }
-    let m = fault_free_with(
-        &Scenario::aircraft_fault_free(3600.0),
-        200..210,
-        Setup::BlockTests,
-    );
-    println!(
-        "aircraft + both block tests, 10 fault-free hours (seeds 200-209): {} false-alarm events in {:.2} h",
-        m.false_alarm_events,
-        m.free_time_s / 3600.0
-    );
-    assert!(m.free_time_s > 10.0 * 3580.0);
-    assert!(m.false_alarm_events <= 34, "{}", m.false_alarm_events);
+    // Design seeds, then seeds no change was looked at on.
+    for (first, name) in [(200, "design"), (700, "held-out")] {
+        let m = fault_free_with(
+            &Scenario::aircraft_fault_free(3600.0),
+            first..first + 10,
+            Setup::BlockTests,
+        );
+        println!(
+            "aircraft + both block tests, 10 fault-free hours ({name}, seeds {first}-{}): {} false-alarm events in {:.2} h",
+            first + 9,
+            m.false_alarm_events,
+            m.free_time_s / 3600.0
+        );
+        assert!(m.free_time_s > 10.0 * 3580.0);
+        // The smallest fault reported (`min_fault`) keeps the scale-factor
+        // and misalignment errors a clean aiding resolves unreported: 34
+        // events on the design seeds without it.
+        assert_eq!(m.false_alarm_events, 0, "{name}");
+    }
 }
 
 /// GIVEN aiding 0.2 s late, not stated to the monitor, WHEN it estimates

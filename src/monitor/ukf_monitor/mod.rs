@@ -288,6 +288,28 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             .unwrap_or_else(|| self.cfg.min_fault * T::lit(MAX_NOMINAL_BIAS_FACTOR))
     }
 
+    /// The block tests' per-channel limits for the three channels from
+    /// `first` (0: accelerometers, 3: gyros): the nominal-bias bound, and
+    /// the smallest deviation reported, `min_fault × threshold_fraction`,
+    /// as the UKF's own threshold method has it.
+    #[cfg(any(feature = "attitude-rate-test", feature = "velocity-increment-test"))]
+    fn block_limits(&self, first: usize) -> block_test::ChannelLimits<T> {
+        let nominal = self.nominal_bias_bound();
+        let relevant = self.cfg.min_fault * self.cfg.threshold_fraction;
+        block_test::ChannelLimits {
+            nominal: Vector3::new(
+                nominal.get(first).copied().unwrap_or_else(T::zero),
+                nominal.get(first + 1).copied().unwrap_or_else(T::zero),
+                nominal.get(first + 2).copied().unwrap_or_else(T::zero),
+            ),
+            relevant: Vector3::new(
+                relevant.get(first).copied().unwrap_or_else(T::zero),
+                relevant.get(first + 1).copied().unwrap_or_else(T::zero),
+                relevant.get(first + 2).copied().unwrap_or_else(T::zero),
+            ),
+        }
+    }
+
     /// One monitor period. Never panics; every anomaly is reported in
     /// [`Report::health`](super::Report::health).
     ///

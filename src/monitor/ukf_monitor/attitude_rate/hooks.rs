@@ -68,15 +68,14 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         let att = aiding.z.fixed_rows::<3>(3);
         let euler = [att.x, att.y, att.z];
-        let cap = self.nominal_bias_bound();
-        let bound: Vector3<T> = cap.fixed_rows::<3>(3).into_owned();
+        let limits = self.block_limits(3);
         let external =
             self.phase == Phase::Monitoring
                 && self.report.status.iter().any(|s| {
                     matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative)
                 });
         self.att_rate
-            .epoch(&cfg, euler, &bound, self.cfg.aiding_timeout_s, external);
+            .epoch(&cfg, euler, &limits, self.cfg.aiding_timeout_s, external);
     }
 
     /// Adds the test's flags to the report: a gyro channel the UKF finds

@@ -45,7 +45,7 @@
 use nalgebra::{UnitQuaternion, Vector3};
 
 use super::block_test::rotation::{from_euler, inverse_right_jacobian, rotation_exp, rotation_log};
-use super::block_test::BlockTest;
+use super::block_test::{BlockTest, ChannelLimits};
 use crate::math::Real;
 use crate::monitor::AttitudeRateConfig;
 
@@ -125,14 +125,14 @@ impl<T: Real> AttitudeRate<T> {
     }
 
     /// An attitude-aiding epoch (ZYX Euler angles of body→NED), closing
-    /// the interval; decides and learns when it closes a block. `bound`:
-    /// the largest offset per gyro channel; `max_interval`: longer
+    /// the interval; decides and learns when it closes a block. `limits`:
+    /// the gyro channels' (largest offset, smallest deviation reported); `max_interval`: longer
     /// intervals are dropped; `external`: a UKF channel is flagged.
     pub fn epoch(
         &mut self,
         cfg: &AttitudeRateConfig<T>,
         euler: [T; 3],
-        bound: &Vector3<T>,
+        limits: &ChannelLimits<T>,
         max_interval: T,
         external: bool,
     ) {
@@ -166,7 +166,7 @@ impl<T: Real> AttitudeRate<T> {
             self.sum = Vector3::zeros();
             self.sum_dt = T::zero();
             self.sum_motion = T::zero();
-            self.test.close_block(cfg, mean, motion, bound);
+            self.test.close_block(cfg, mean, motion, limits);
         }
     }
 }

@@ -46,7 +46,10 @@ fn fly<T: Real>(
 ) -> UnitQuaternion<f64> {
     let dt = 0.01;
     let mut q = truth;
-    let bound = Vector3::from_element(T::lit(1.0));
+    let limits = ChannelLimits {
+        nominal: Vector3::from_element(T::lit(1.0)),
+        relevant: Vector3::zeros(),
+    };
     let steps = libm::round(secs / dt) as usize;
     for i in 0..steps {
         let t = t0 + i as f64 * dt;
@@ -60,7 +63,7 @@ fn fly<T: Real>(
             ar.epoch(
                 cfg,
                 [T::lit(r), T::lit(p), T::lit(y)],
-                &bound,
+                &limits,
                 T::lit(1.0),
                 false,
             );

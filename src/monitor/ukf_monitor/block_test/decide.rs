@@ -1,13 +1,11 @@
 //! The block test's decisions: scores, runs, flags, withdrawal.
 
-use nalgebra::Vector3;
-
 use super::*;
 
 impl<T: Real> BlockTest<T> {
     /// Scores the newest windows of each length, updates the runs, flags
     /// and estimates.
-    pub(super) fn decide(&mut self, cfg: &BlockTestConfig<T>, bound: &Vector3<T>) {
+    pub(super) fn decide(&mut self, cfg: &BlockTestConfig<T>, limits: &ChannelLimits<T>) {
         let longest = usize::from(cfg.lengths[NL - 1]);
         let need = T::lit(longest as f64);
         // Per length and channel: the window mean less the offset and the
@@ -44,7 +42,7 @@ impl<T: Real> BlockTest<T> {
                 let Some(t) = self.threshold(k, c, nu) else {
                     continue;
                 };
-                let lim = bound.get(c).copied().unwrap_or_else(T::zero);
+                let lim = limits.nominal.get(c).copied().unwrap_or_else(T::zero);
                 let off = m.fmax(-lim).fmin(lim);
                 let (Some(wc), Some(slot)) =
                     (w.get(c), judged.get_mut(k).and_then(|j| j.get_mut(c)))
@@ -101,6 +99,10 @@ impl<T: Real> BlockTest<T> {
                 if muted && k > 0 {
                     continue;
                 }
+                // Flagged only beyond the smallest fault reported as well
+                // (learning stays gated on the statistical ratio above).
+                let floor = limits.relevant.get(c).copied().unwrap_or_else(T::zero);
+                let r = d.abs() / lim.fmax(floor);
                 if let (Some(b), Some(sg), Some(e), Some(bl)) = (
                     best.get_mut(c),
                     sign.get_mut(c),

@@ -79,14 +79,14 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             return;
         }
         let v: Vector3<T> = aiding.z.fixed_rows::<3>(0).into_owned();
-        let bound: Vector3<T> = self.nominal_bias_bound().fixed_rows::<3>(0).into_owned();
+        let limits = self.block_limits(0);
         let external =
             self.phase == Phase::Monitoring
                 && self.report.status.iter().any(|s| {
                     matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative)
                 });
         self.vel_inc
-            .velocity_epoch(&cfg, v, &bound, self.cfg.aiding_timeout_s, external);
+            .velocity_epoch(&cfg, v, &limits, self.cfg.aiding_timeout_s, external);
     }
 
     /// Adds the test's flags to the report: an accelerometer channel the

@@ -48,7 +48,7 @@
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 use super::block_test::rotation::{from_euler, rotation_exp};
-use super::block_test::BlockTest;
+use super::block_test::{BlockTest, ChannelLimits};
 use crate::math::{try_inverse, Real};
 use crate::monitor::VelocityIncrementConfig;
 
@@ -249,14 +249,15 @@ impl<T: Real> VelocityIncrement<T> {
     }
 
     /// A GNSS velocity epoch (NED, m/s) the UKF fused, closing the
-    /// interval; decides and learns when it closes a block. `bound`: the
-    /// largest offset per accelerometer channel; `max_interval`: longer
+    /// interval; decides and learns when it closes a block. `limits`: the
+    /// accelerometer channels' (largest offset, smallest deviation
+    /// reported); `max_interval`: longer
     /// intervals are dropped; `external`: a UKF channel is flagged.
     pub fn velocity_epoch(
         &mut self,
         cfg: &VelocityIncrementConfig<T>,
         v: Vector3<T>,
-        bound: &Vector3<T>,
+        limits: &ChannelLimits<T>,
         max_interval: T,
         external: bool,
     ) {
@@ -284,14 +285,14 @@ impl<T: Real> VelocityIncrement<T> {
             self.complete = true;
         }
         if self.block_dt > T::zero() && self.block_dt >= cfg.block_s - interval * T::lit(0.5) {
-            self.close_block(cfg, bound);
+            self.close_block(cfg, limits);
         }
     }
 
     /// Each lag's block estimate `−(ΣM)⁻¹ Σr`; the lag in use's goes to
     /// the test, and every lag's variation is learnt while the test is
     /// quiet.
-    fn close_block(&mut self, cfg: &VelocityIncrementConfig<T>, bound: &Vector3<T>) {
+    fn close_block(&mut self, cfg: &VelocityIncrementConfig<T>, limits: &ChannelLimits<T>) {
         let motion = self.block_motion / self.block_dt;
         let mut est = [None; LAGS];
         for ((e, r), m) in est
@@ -311,7 +312,7 @@ impl<T: Real> VelocityIncrement<T> {
             self.last = [None; LAGS];
             return;
         };
-        self.test.close_block(cfg, mean, motion, bound);
+        self.test.close_block(cfg, mean, motion, limits);
         self.learn_lag(cfg, &est);
     }
 

@@ -35,7 +35,8 @@ const EULER: [f64; 3] = [10.0 * DEG, -5.0 * DEG, 30.0 * DEG];
 /// velocity `vel(t)`, its integral); a 100-Hz accelerometer reading
 /// `Cᵀ(a − g) + bias(t) + white noise imu_sd`, 10-Hz attitude aiding and
 /// 5-Hz GNSS velocity `vel(t − lag)` with white errors `gnss_sd`, fed to
-/// `vi` for `secs` from `t0`.
+/// `vi` for `secs` from `t0`; deviations below `relevant` (m/s², every
+/// axis) are not reported.
 #[allow(clippy::too_many_arguments)]
 fn fly(
     vi: &mut VelocityIncrement<f64>,
@@ -49,10 +50,14 @@ fn fly(
     noise: &mut Noise,
     imu_sd: f64,
     gnss_sd: f64,
+    relevant: f64,
 ) {
     let c = from_euler(EULER[0], EULER[1], EULER[2]).to_rotation_matrix();
     let g = Vector3::new(0.0, 0.0, G0);
-    let bound = Vector3::from_element(2.0);
+    let limits = ChannelLimits {
+        nominal: Vector3::from_element(2.0),
+        relevant: Vector3::from_element(relevant),
+    };
     let steps = libm::round(secs / DT) as usize;
     for i in 0..steps {
         let t = t0 + i as f64 * DT;
@@ -65,7 +70,7 @@ fn fly(
         }
         if k % 20 == 0 {
             let v = vel(t + DT - lag) + noise.vec(gnss_sd);
-            vi.velocity_epoch(cfg, v, &bound, 1.0, false);
+            vi.velocity_epoch(cfg, v, &limits, 1.0, false);
         }
     }
 }
@@ -113,6 +118,7 @@ fn a_constant_attitude_and_acceleration_give_the_body_bias_in_closed_form() {
         &mut n,
         0.0,
         0.0,
+        0.0,
     );
     assert!(vi.test.filled >= 25, "{} blocks", vi.test.filled);
     for age in 0..vi.test.filled {
@@ -141,6 +147,7 @@ fn the_gnss_lag_is_learnt_from_the_data() {
         &mut n,
         0.3,
         0.02,
+        0.0,
     );
     assert!((vi.lag_s() - 0.3).abs() < 1e-9, "lag {}", vi.lag_s());
     let d = &vi.diff2;
@@ -163,7 +170,7 @@ fn a_step_is_flagged_with_its_size_and_the_flag_clears_after_it() {
     };
     let run = |vi: &mut VelocityIncrement<f64>, n: &mut Noise, t0: f64, secs: f64| {
         fly(
-            vi, &cfg, t0, secs, weave_a, weave_v, bias, 0.2, n, 0.5, 0.05,
+            vi, &cfg, t0, secs, weave_a, weave_v, bias, 0.2, n, 0.5, 0.05, 0.0,
         );
     };
     // 60 s of learning, then 90 s judged fault-free.
@@ -219,4 +226,51 @@ fn a_step_is_flagged_with_its_size_and_the_flag_clears_after_it() {
     }
     let cleared = cleared.expect("flag never cleared");
     assert!(cleared <= 8.0, "cleared {cleared} s after the step");
+}
+
+/// A 0.15 m/s² x step on quiet aiding (the simulated kind): flagged on the
+/// statistics alone, not once the smallest fault reported is 0.2 m/s².
+#[test]
+fn a_significant_deviation_below_the_smallest_fault_is_not_reported() {
+    let cfg = VelocityIncrementConfig::velocity();
+    let (onset, end) = (120.0, 140.0);
+    let bias = move |t: f64| {
+        if (onset..end).contains(&t) {
+            Vector3::new(0.15, 0.0, 0.0)
+        } else {
+            Vector3::zeros()
+        }
+    };
+    let flagged_s = |relevant: f64| {
+        let mut vi = new_test(&cfg);
+        let mut n = Noise(5);
+        fly(
+            &mut vi, &cfg, 0.0, 60.0, weave_a, weave_v, bias, 0.2, &mut n, 0.1, 0.01, relevant,
+        );
+        vi.test.start_judging();
+        let mut flagged = 0;
+        for s in 60..160 {
+            fly(
+                &mut vi,
+                &cfg,
+                f64::from(s),
+                1.0,
+                weave_a,
+                weave_v,
+                bias,
+                0.2,
+                &mut n,
+                0.1,
+                0.01,
+                relevant,
+            );
+            if vi.test.detail.flag != [0; 3] {
+                flagged += 1;
+            }
+        }
+        flagged
+    };
+    let on_statistics = flagged_s(0.0);
+    assert!(on_statistics >= 10, "flagged {on_statistics} s");
+    assert_eq!(flagged_s(0.2), 0);
 }
