@@ -42,6 +42,10 @@ if s.get("aiding_delay_s"):
         ", ".join("%.2f" % h for h in s["heading_offset_deg"])))
 print("  velocity aiding delay (%s): %s s" % (s["velocity_delay_mode"],
     ", ".join("%.2f" % d for d in s["velocity_delay_s"])))
+if s.get("velocity_increment_lag_s"):
+    print("  velocity-increment test: GNSS lag %s s; accel offset %s m/s2" % (
+        ", ".join("%.1f" % d for d in s["velocity_increment_lag_s"]),
+        "; ".join(" ".join("%+.2f" % x for x in o) for o in s["velocity_increment_offset_m_s2"])))
 if s.get("innovation_inflation_factor"):
     print("  learned inflation [vn ve vd roll pitch yaw]: " + "; ".join(
         " ".join("%.1f" % x for x in f) for f in s["innovation_inflation_factor"]))

@@ -36,14 +36,20 @@ enum Setup {
     /// Plus the gyro/attitude-aiding consistency test (replay's flight
     /// settings).
     AttitudeRate,
+    /// Plus the accelerometer/GNSS-velocity consistency test as well
+    /// (replay's flight settings; GNSS aiding only).
+    BlockTests,
 }
 
 fn config(scn: &Scenario, setup: Setup) -> UkfMonitorConfig<f32> {
     let mut c = monitor_config::<f32>(scn, &RunOptions::default());
     c.estimate_aiding_delay = matches!(setup, Setup::EstimateDelay);
     c.estimate_heading_offset = matches!(setup, Setup::EstimateHeading);
-    if matches!(setup, Setup::AttitudeRate) {
+    if matches!(setup, Setup::AttitudeRate | Setup::BlockTests) {
         c.attitude_rate = Some(imu_fdi::monitor::AttitudeRateConfig::flight());
+    }
+    if matches!(setup, Setup::BlockTests) && c.aiding == imu_fdi::model::AidingKind::GnssAttitude {
+        c.velocity_increment = Some(imu_fdi::monitor::VelocityIncrementConfig::velocity());
     }
     c
 }
@@ -165,6 +171,47 @@ fn aircraft_attitude_rate_test() {
     );
     assert!(m.free_time_s > 10.0 * 3580.0);
     assert_eq!(m.false_alarm_events, 0);
+}
+
+/// GIVEN the aircraft episodes WHEN the accelerometer/GNSS-velocity test
+/// runs beside the gyro/attitude-aiding test (replay's flight profile)
+/// THEN the episode targets hold on the design and held-out seeds (no
+/// post-clear event), but the 10 fault-free hours raise 34 events, not 0:
+/// the test is calibrated to its design rate (10 per hour, as the gyro
+/// test's) and the simulated aiding is so clean (10-s window σ ≈ 0.01 m/s²)
+/// that the accelerometers' scale-factor and misalignment errors under
+/// load factor show (docs/results.md). Off in the presets for that reason.
+#[test]
+#[ignore = "40 seeds of episodes and 10 h: run with --release -- --ignored"]
+fn aircraft_velocity_increment_test() {
+    let base = Scenario::aircraft_fault_free(0.0);
+    for (seeds, name) in [
+        (100..120, "seeds 100-119"),
+        (500..520, "held-out seeds 500-519"),
+    ] {
+        let t = episodes_with(&base, seeds, Setup::BlockTests);
+        assert_targets(&format!("aircraft + both block tests, {name}"), &t);
+        assert_eq!(t.detected, t.episodes);
+    }
+    // Design seeds, then seeds no change was looked at on.
+    for (first, name) in [(200, "design"), (700, "held-out")] {
+        let m = fault_free_with(
+            &Scenario::aircraft_fault_free(3600.0),
+            first..first + 10,
+            Setup::BlockTests,
+        );
+        println!(
+            "aircraft + both block tests, 10 fault-free hours ({name}, seeds {first}-{}): {} false-alarm events in {:.2} h",
+            first + 9,
+            m.false_alarm_events,
+            m.free_time_s / 3600.0
+        );
+        assert!(m.free_time_s > 10.0 * 3580.0);
+        // The smallest fault reported (`min_fault`) keeps the scale-factor
+        // and misalignment errors a clean aiding resolves unreported: 34
+        // events on the design seeds without it.
+        assert_eq!(m.false_alarm_events, 0, "{name}");
+    }
 }
 
 /// GIVEN aiding 0.2 s late, not stated to the monitor, WHEN it estimates

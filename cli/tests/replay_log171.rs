@@ -145,22 +145,31 @@ fn estimators_find_no_attitude_lag_and_a_quarter_second_gps_lag() {
 
 /// Fault-free flag events per IMU, as measured (docs/results.md). The
 /// gyro/attitude-aiding test (on in the flight profile) adds one event, on
-/// IMU1 g_y (147–152 s, after a minute of 60–100 °/s manoeuvres).
+/// IMU1 g_y (147–152 s, after a minute of 60–100 °/s manoeuvres); the
+/// accelerometer/GNSS-velocity test (on too) none at lag 0, one a_x event
+/// per IMU with the GPS lag fitted.
 #[test]
 fn fault_free_flag_events_per_imu() {
-    let cases: [(&[&str], [u64; 3]); 6] = [
-        (&["--monitor", "ukf"], [0, 1, 0]),
-        (&["--monitor", "ukf", "--attitude-rate", "off"], [0, 0, 0]),
-        (&["--monitor", "ukf", "--velocity-delay", "auto"], [1, 8, 1]),
+    let ukf = ["--monitor", "ukf"];
+    let auto = ["--monitor", "ukf", "--velocity-delay", "auto"];
+    let cases: [(&[&str], [u64; 3]); 8] = [
+        (&ukf, [0, 1, 0]),
+        (&[&ukf[..], &["--attitude-rate", "off"]].concat(), [0, 0, 0]),
+        (
+            &[&ukf[..], &["--velocity-increment", "off"]].concat(),
+            [0, 1, 0],
+        ),
+        (&auto, [2, 9, 2]),
+        (
+            &[&auto[..], &["--velocity-increment", "off"]].concat(),
+            [1, 8, 1],
+        ),
         (
             &[
-                "--monitor",
-                "ukf",
-                "--velocity-delay",
-                "auto",
-                "--attitude-rate",
-                "off",
-            ],
+                &auto[..],
+                &["--attitude-rate", "off", "--velocity-increment", "off"],
+            ]
+            .concat(),
             [1, 7, 1],
         ),
         (&["--monitor", "otsukf"], [10, 11, 10]),
@@ -178,8 +187,10 @@ fn fault_free_flag_events_per_imu() {
 /// the GPS lag fitted finds 7 of the 9 accelerometer steps and, with the
 /// gyro/attitude-aiding test, 7 of the 9 2 °/s gyro steps (14/18; no gyro
 /// step without the test); the flight default (learned inflation, lag 0)
-/// finds no accelerometer step and all 9 gyro steps (none without the test);
-/// the OTSUKF with the lag fitted three gyro steps.
+/// finds all 9 gyro steps (none without the gyro test) and, with the
+/// accelerometer/GNSS-velocity test, 5 of the 9 0.5 m/s² steps: IMU0's
+/// three, IMU2's x and y (none without it); the OTSUKF with the lag fitted
+/// three gyro steps.
 #[test]
 fn steps_detected_within_10_s() {
     let x = true;
@@ -188,7 +199,14 @@ fn steps_detected_within_10_s() {
         steps(&["--monitor", "ukf", "--velocity-delay", "auto"]),
         [[x, x, x, x, x, o], [x, x, o, x, x, o], [x, x, o, x, x, x]]
     );
-    assert_eq!(steps(&["--monitor", "ukf"]), [[o, o, o, x, x, x]; 3]);
+    assert_eq!(
+        steps(&["--monitor", "ukf"]),
+        [[x, x, x, x, x, x], [o, o, o, x, x, x], [x, x, o, x, x, x]]
+    );
+    assert_eq!(
+        steps(&["--monitor", "ukf", "--velocity-increment", "off"]),
+        [[o, o, o, x, x, x]; 3]
+    );
     // The OTSUKF with the lag fitted (1 event per IMU): 3/18.
     assert_eq!(
         steps(&["--monitor", "otsukf", "--velocity-delay", "auto"]),

@@ -1,38 +1,61 @@
-//! Settings of the UKF monitor's gyro/attitude-aiding consistency test
-//! (issue 15, `ukf_monitor/attitude_rate/`): the gyro integrated between
-//! attitude-aiding epochs against the aiding's own rotation, summed over
-//! seconds, for gyro biases the ten-epoch innovation windows cannot tell
-//! from an aiding whose errors wander (a real autopilot's attitude).
+//! Settings of the UKF monitor's two block tests (issue 15,
+//! `ukf_monitor/block_test/`): the gyro/attitude-aiding test
+//! (`attitude_rate/`: the gyro integrated between attitude-aiding epochs
+//! against the aiding's own rotation) and the accelerometer/GNSS-velocity
+//! test (`velocity_increment/`: the specific force integrated between
+//! velocity epochs against the GNSS velocity change), both summed over
+//! seconds, for biases the ten-epoch innovation windows cannot tell from
+//! aiding whose errors wander (a real autopilot's attitude, a GNSS
+//! receiver's velocity).
 
 use crate::math::Real;
 
-/// Longest window of the test, in blocks (the monitor keeps twice this many
+/// Longest window of a block test, in blocks (the monitor keeps twice this many
 /// block means: a block is learnt only once every decision that saw it has
 /// been made).
 pub const ATTITUDE_RATE_MAX_BLOCKS: usize = 20;
-/// Window lengths of the test.
+/// Window lengths of a block test.
 pub const ATTITUDE_RATE_LENGTHS: usize = 3;
 
 /// The gyro/attitude-aiding consistency test's settings
 /// ([`UkfMonitorConfig::attitude_rate`](crate::monitor::UkfMonitorConfig::attitude_rate)).
+pub type AttitudeRateConfig<T> = BlockTestConfig<T>;
+/// The accelerometer/GNSS-velocity consistency test's settings
+/// ([`UkfMonitorConfig::velocity_increment`](crate::monitor::UkfMonitorConfig::velocity_increment)).
+pub type VelocityIncrementConfig<T> = BlockTestConfig<T>;
+/// What the gyro/attitude-aiding test shows (rad/s).
+pub type AttitudeRateDetail<T> = BlockTestDetail<T>;
+/// What the accelerometer/GNSS-velocity test shows (m/s²).
+pub type VelocityIncrementDetail<T> = BlockTestDetail<T>;
+
+/// A block test's settings ([`AttitudeRateConfig`],
+/// [`VelocityIncrementConfig`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct AttitudeRateConfig<T> {
-    /// Block length, s: the per-epoch residual rotations are summed over
-    /// blocks of (about) this length; one decision per block.
+pub struct BlockTestConfig<T> {
+    /// Block length, s: the per-epoch residuals (rotations, velocity
+    /// changes) are summed over blocks of (about) this length; one decision
+    /// per block.
     pub block_s: T,
     /// The three window lengths, in blocks (ascending, at most
     /// [`ATTITUDE_RATE_MAX_BLOCKS`]).
     pub lengths: [u8; ATTITUDE_RATE_LENGTHS],
     /// Design false-alarm rate of the whole test, events per hour: the
     /// per-decision probability (two-sided) is this over the decisions
-    /// made in an hour (three gyro channels × three lengths per block),
+    /// made in an hour (three channels × three lengths per block),
     /// and the threshold is the Student-t quantile of it at the degrees of
     /// freedom the learnt variance has.
     pub false_alarms_per_hour: f64,
     /// Weight, in independent windows, of the white-noise prior of each
     /// length's reddening factor (window variance over block variance / L).
     pub prior_windows: T,
+    /// The reddening factor's prior: white (`false`, ρ = 1) or that of a
+    /// first-order moving average with the lag-1 autocorrelation `r₁`
+    /// learnt on the blocks (`true`, ρ_L = 1 + 2(1 − 1/L) r₁, at least
+    /// 1/L): aiding errors that telescope (`r₁ → −½`) make a window's
+    /// variance fall as 1/L², not 1/L, and a white prior then overstates it
+    /// up to L times until the windows have shown otherwise.
+    pub lag1_prior: bool,
     /// Degrees of freedom a window length needs before it judges.
     pub min_dof: T,
     /// A block is learnt only if every decision that saw it stayed below
@@ -50,8 +73,8 @@ pub struct AttitudeRateConfig<T> {
     pub hold: u8,
 }
 
-impl<T: Real> AttitudeRateConfig<T> {
-    /// Half-second blocks, windows of 2.5, 5 and 10 s, 10 false alarms per
+impl<T: Real> BlockTestConfig<T> {
+    /// The gyro test's: half-second blocks, windows of 2.5, 5 and 10 s, 10 false alarms per
     /// hour by design, a white prior worth 4 windows, judging from 6
     /// degrees of freedom, learning below 0.8 of the threshold, 10 minutes
     /// of memory, two decisions to flag, held for one more.
@@ -61,11 +84,26 @@ impl<T: Real> AttitudeRateConfig<T> {
             lengths: [5, 10, 20],
             false_alarms_per_hour: 10.0,
             prior_windows: T::lit(4.0),
+            lag1_prior: false,
             min_dof: T::lit(6.0),
             learn_below: T::lit(0.8),
             memory_blocks: T::lit(1200.0),
             confirm: 2,
             hold: 1,
+        }
+    }
+
+    /// The velocity test's: 1-s blocks (five 5-Hz GNSS epochs: the GNSS
+    /// velocity's errors telescope over a block, so shorter blocks only add
+    /// end terms), windows of 3, 5 and 10 s, the lag-1 prior (those end
+    /// terms telescope), and otherwise
+    /// [`flight`](Self::flight)'s settings.
+    pub fn velocity() -> Self {
+        Self {
+            block_s: T::one(),
+            lengths: [2, 5, 10],
+            lag1_prior: true,
+            ..Self::flight()
         }
     }
 
@@ -112,18 +150,21 @@ impl<T: Real> AttitudeRateConfig<T> {
     }
 }
 
-/// What the test shows ([`UkfMonitor::attitude_rate_detail`](crate::monitor::UkfMonitor::attitude_rate_detail)).
+/// What a block test shows
+/// ([`UkfMonitor::attitude_rate_detail`](crate::monitor::UkfMonitor::attitude_rate_detail),
+/// [`UkfMonitor::velocity_increment_detail`](crate::monitor::UkfMonitor::velocity_increment_detail)),
+/// in the sensor's units (rad/s, m/s²).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct AttitudeRateDetail<T> {
-    /// Per gyro channel (x, y, z): the largest score over its threshold of
+pub struct BlockTestDetail<T> {
+    /// Per channel (body x, y, z): the largest score over its threshold of
     /// the last decision (0 before a length can judge).
     pub ratio: [T; 3],
-    /// Per gyro channel: −1, 0 or +1, the test's flag.
+    /// Per channel: −1, 0 or +1, the test's flag.
     pub flag: [i8; 3],
-    /// Per gyro channel: the window mean less the offset while flagged,
-    /// rad/s (0 otherwise).
+    /// Per channel: the window mean less the offset while flagged (0
+    /// otherwise).
     pub estimate: [T; 3],
-    /// Per gyro channel: the learnt offset against the aiding, rad/s.
+    /// Per channel: the learnt offset against the aiding.
     pub offset: [T; 3],
     /// Per window length: the reddening factor learnt (channel x, y, z).
     pub reddening: [[T; 3]; ATTITUDE_RATE_LENGTHS],

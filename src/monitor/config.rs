@@ -4,7 +4,7 @@ use crate::detect::{Detector, Statistic};
 use crate::filter::{SigmaParams, SigmaWeights};
 use crate::math::Real;
 use crate::model::{AidingKind, ImuNoisePsd, ImuVec, MeasVec, StateVec, G0};
-use crate::monitor::AttitudeRateConfig;
+use crate::monitor::{AttitudeRateConfig, VelocityIncrementConfig};
 
 /// A configuration the monitor cannot run with. Its `Display` names the
 /// field.
@@ -28,7 +28,8 @@ pub enum ConfigError {
     /// `aiding-estimators`; `fault_psd`: `fault-tracking`; M2 `aiding`:
     /// `m2-aiding`; a `detector` other than GLR: `alt-detectors`; a
     /// `statistic` other than `Normalized`: `t-statistics`;
-    /// `attitude_rate`: `attitude-rate-test`).
+    /// `attitude_rate`: `attitude-rate-test`; `velocity_increment`:
+    /// `velocity-increment-test`).
     NotCompiled(&'static str),
 }
 
@@ -52,6 +53,7 @@ impl ConfigError {
             Self::NotCompiled("detector") => Some("alt-detectors"),
             Self::NotCompiled("statistic") => Some("t-statistics"),
             Self::NotCompiled("attitude_rate") => Some("attitude-rate-test"),
+            Self::NotCompiled("velocity_increment") => Some("velocity-increment-test"),
             Self::NotCompiled(_) => Some("aiding-estimators"),
             _ => None,
         }
@@ -238,6 +240,17 @@ pub struct UkfMonitorConfig<T> {
     /// `replay`'s flight profile ([`AttitudeRateConfig::flight`]). Needs
     /// the feature `attitude-rate-test`.
     pub attitude_rate: Option<AttitudeRateConfig<T>>,
+    /// The accelerometer/GNSS-velocity consistency test (issue 15,
+    /// `ukf_monitor/velocity_increment/`): the raw specific force rotated
+    /// by the attitude aiding and integrated between GNSS velocity epochs
+    /// (at a GNSS lag learnt from the data) against the GNSS velocity
+    /// change, as a body-axis bias over windows of seconds, tested like
+    /// [`attitude_rate`](Self::attitude_rate). Its flags are added to the
+    /// ten-epoch test's on the accelerometer channels. Off in the presets;
+    /// on in `replay`'s flight profile ([`VelocityIncrementConfig::velocity`]).
+    /// Needs the feature `velocity-increment-test` and GNSS velocity plus
+    /// attitude aiding (M2).
+    pub velocity_increment: Option<VelocityIncrementConfig<T>>,
     /// An aiding channel silent for this long is "not monitored", s.
     pub aiding_timeout_s: T,
     /// Identical consecutive IMU samples before the IMU is reported frozen.
@@ -329,6 +342,7 @@ impl<T: Real> UkfMonitorConfig<T> {
             estimate_heading_offset: false,
             fault_psd: None,
             attitude_rate: None,
+            velocity_increment: None,
             aiding_timeout_s: T::lit(1.0),
             frozen_samples: 20,
         }
@@ -503,6 +517,15 @@ impl<T: Real> UkfMonitorConfig<T> {
             }
             ar.check().map_err(ConfigError::OutOfRange)?;
         }
+        if let Some(vi) = self.velocity_increment.as_ref() {
+            if !cfg!(feature = "velocity-increment-test") {
+                return Err(ConfigError::NotCompiled("velocity_increment"));
+            }
+            // NED GNSS velocity is what it integrates against (M2).
+            if vi.check().is_err() || self.aiding != AidingKind::GnssAttitude {
+                return Err(ConfigError::OutOfRange("velocity_increment"));
+            }
+        }
         Ok(())
     }
 }
@@ -520,6 +543,7 @@ mod tests {
             ("detector", "alt-detectors"),
             ("statistic", "t-statistics"),
             ("attitude_rate", "attitude-rate-test"),
+            ("velocity_increment", "velocity-increment-test"),
         ] {
             assert_eq!(ConfigError::NotCompiled(field).feature(), Some(feature));
         }
@@ -567,6 +591,24 @@ mod tests {
         let mut c = UkfMonitorConfig::auv();
         c.attitude_rate = Some(AttitudeRateConfig::flight());
         check(c, "attitude_rate", cfg!(feature = "attitude-rate-test"));
+        if cfg!(feature = "m2-aiding") {
+            let mut c = UkfMonitorConfig::aircraft();
+            c.velocity_increment = Some(VelocityIncrementConfig::velocity());
+            check(
+                c,
+                "velocity_increment",
+                cfg!(feature = "velocity-increment-test"),
+            );
+        }
         assert_eq!(UkfMonitorConfig::<f64>::auv().validate(), Ok(()));
+        // The velocity test integrates against NED GNSS velocity (M2 only).
+        let mut c = UkfMonitorConfig::<f64>::auv();
+        c.velocity_increment = Some(VelocityIncrementConfig::velocity());
+        let want = if cfg!(feature = "velocity-increment-test") {
+            ConfigError::OutOfRange("velocity_increment")
+        } else {
+            ConfigError::NotCompiled("velocity_increment")
+        };
+        assert_eq!(c.validate(), Err(want));
     }
 }

@@ -13,7 +13,9 @@ mod ukf_monitor;
 
 pub use align::align_state;
 pub use attitude_rate_config::{
-    AttitudeRateConfig, AttitudeRateDetail, ATTITUDE_RATE_LENGTHS, ATTITUDE_RATE_MAX_BLOCKS,
+    AttitudeRateConfig, AttitudeRateDetail, BlockTestConfig, BlockTestDetail,
+    VelocityIncrementConfig, VelocityIncrementDetail, ATTITUDE_RATE_LENGTHS,
+    ATTITUDE_RATE_MAX_BLOCKS,
 };
 pub use config::{ConfigError, UkfMonitorConfig};
 pub use otsukf_monitor::{OtsukfConfig, OtsukfMonitor};

@@ -101,11 +101,18 @@ pub(crate) struct Args {
     /// flight); `off` leaves the gyros to the innovation windows alone.
     #[arg(long, value_enum, default_value_t = OnOff::On)]
     attitude_rate: OnOff,
+    /// Flight profile, UKF monitor: the accelerometer/GNSS-velocity
+    /// consistency test (the specific force rotated by the attitude aiding
+    /// and integrated between GNSS velocity epochs, at a GNSS lag learnt on
+    /// the flight, against the velocity change over 3–10 s windows); `off`
+    /// leaves the accelerometers to the innovation windows alone.
+    #[arg(long, value_enum, default_value_t = OnOff::On)]
+    velocity_increment: OnOff,
     #[command(flatten)]
     detect: DetectOpts,
 }
 
-/// `--attitude-rate`.
+/// `--attitude-rate`, `--velocity-increment`.
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub(crate) enum OnOff {
     On,
@@ -159,6 +166,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         heading_offset,
         velocity_delay,
         attitude_rate,
+        velocity_increment,
         detect,
     } = args;
     let ropts = options("replay", &detect);
@@ -204,6 +212,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         estimate_heading_offset: heading_offset == HeadingArg::Auto,
         velocity_delay,
         attitude_rate: attitude_rate == OnOff::On,
+        velocity_increment: velocity_increment == OnOff::On,
     };
     // With --json, stdout carries only the JSON object.
     macro_rules! note {

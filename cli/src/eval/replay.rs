@@ -514,6 +514,10 @@ pub fn replay_observed(
                 if let Some(h) = r.detail.heading_offset_rad {
                     sum.heading_offset_deg.push(h.to_degrees());
                 }
+                if let Some((lag, off)) = r.detail.velocity_increment {
+                    sum.velocity_increment_lag_s.push(lag);
+                    sum.velocity_increment_offset_m_s2.push(off);
+                }
             }
             cells.push((r.phase, r.status, r.fault_estimate, r.detail.fault_sigma));
         }

@@ -37,6 +37,10 @@ pub struct ReplayDetail {
     /// monitor; 0 unless estimated;
     /// [`UkfMonitor::heading_offset_estimate`]).
     pub heading_offset_rad: Option<f64>,
+    /// The accelerometer/GNSS-velocity test's GNSS lag, s, and learnt
+    /// offset per accelerometer axis, m/s² (UKF monitor with the test on;
+    /// [`UkfMonitor::velocity_increment_lag`]).
+    pub velocity_increment: Option<(f64, [f64; 3])>,
 }
 
 /// One monitor of either kind.
@@ -72,10 +76,14 @@ impl ReplayMonitor {
             Self::Ukf(m) => {
                 let r = m.step(imu, dt, aiding);
                 let (delay, heading) = (m.aiding_delay_estimate(), m.heading_offset_estimate());
+                let vel_inc = m
+                    .velocity_increment_lag()
+                    .zip(m.velocity_increment_detail().map(|d| d.offset));
                 r.map_detail(|d| ReplayDetail {
                     fault_sigma: Some(d.fault_sigma),
                     aiding_delay_s: Some(delay),
                     heading_offset_rad: Some(heading),
+                    velocity_increment: vel_inc,
                     innovation_inflation: Some(d.innovation_inflation),
                     innovations: Some(core::array::from_fn(|i| match d.diag.get(i) {
                         Some(c) if c.available => (c.innovation, c.variance),
@@ -89,6 +97,7 @@ impl ReplayMonitor {
                 innovations: None,
                 aiding_delay_s: None,
                 heading_offset_rad: None,
+                velocity_increment: None,
             }),
         }
     }

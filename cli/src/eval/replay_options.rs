@@ -1,8 +1,8 @@
 //! The options of a SPEC §10 replay ([`super::replay::replay`]): tuning
 //! profile, learning, aiding noise and latencies, the monitor.
 
-use imu_fdi::model::MeasVec;
-use imu_fdi::monitor::{AttitudeRateConfig, UkfMonitorConfig};
+use imu_fdi::model::{AidingKind, MeasVec};
+use imu_fdi::monitor::{AttitudeRateConfig, UkfMonitorConfig, VelocityIncrementConfig};
 
 use super::replay_monitor::MonitorKind;
 
@@ -59,6 +59,10 @@ pub struct ReplayOptions {
     /// Flight profile, UKF monitor: run the gyro/attitude-aiding
     /// consistency test (`UkfMonitorConfig::attitude_rate`, default on).
     pub attitude_rate: bool,
+    /// Flight profile, UKF monitor: run the accelerometer/GNSS-velocity
+    /// consistency test (`UkfMonitorConfig::velocity_increment`, default
+    /// on; GNSS aiding only).
+    pub velocity_increment: bool,
 }
 
 /// How the UKF monitor treats the aiding's latency
@@ -97,6 +101,7 @@ impl Default for ReplayOptions {
             estimate_heading_offset: false,
             velocity_delay: AidingDelay::default(),
             attitude_rate: true,
+            velocity_increment: true,
         }
     }
 }
@@ -134,6 +139,11 @@ pub fn flight_config(
     // learnt on this flight (issue 15).
     if opts.attitude_rate {
         c.attitude_rate = Some(AttitudeRateConfig::flight());
+    }
+    // Small accelerometer biases against GNSS velocity: the velocity
+    // increment over windows of seconds (issue 15). It needs NED velocity.
+    if opts.velocity_increment && c.aiding == AidingKind::GnssAttitude {
+        c.velocity_increment = Some(VelocityIncrementConfig::velocity());
     }
     c
 }

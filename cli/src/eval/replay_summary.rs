@@ -122,4 +122,10 @@ pub struct ReplaySummary {
     /// (two aiding errors and the IMU's integration error over one
     /// interval).
     pub velocity_fit_rms_m_s: Vec<f64>,
+    /// Per IMU (UKF monitor, `--velocity-increment on`): the GNSS lag the
+    /// accelerometer/GNSS-velocity test used on the last row, s.
+    pub velocity_increment_lag_s: Vec<f64>,
+    /// Per IMU: that test's learnt accelerometer offset against the GNSS
+    /// velocity (x, y, z), m/s².
+    pub velocity_increment_offset_m_s2: Vec<[f64; 3]>,
 }

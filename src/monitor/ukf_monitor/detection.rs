@@ -61,9 +61,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             Phase::Monitoring => {
                 self.detect(health);
                 self.att_rate_apply();
+                self.vel_inc_apply();
                 // Not while the gyro/attitude test sees something either: a
                 // slow bias under its threshold is not absorbed.
                 let quiet = self.att_rate_quiet()
+                    && self.vel_inc_quiet()
                     && self.report.status.iter().all(|s| {
                         !matches!(s, ChannelState::FaultNegative | ChannelState::FaultPositive)
                     })

@@ -20,6 +20,8 @@ use crate::stats::normal_upper_quantile;
 mod attitude_rate;
 #[cfg(not(feature = "attitude-rate-test"))]
 mod attitude_rate_off;
+#[cfg(any(feature = "attitude-rate-test", feature = "velocity-increment-test"))]
+mod block_test;
 mod compose;
 mod delay;
 mod detection;
@@ -29,6 +31,10 @@ mod heading;
 mod history;
 mod phase;
 mod realign;
+#[cfg(feature = "velocity-increment-test")]
+mod velocity_increment;
+#[cfg(not(feature = "velocity-increment-test"))]
+mod velocity_increment_off;
 
 use delay::DelayEstimator;
 
@@ -122,6 +128,10 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     /// The gyro/attitude-aiding consistency test (`attitude_rate/`).
     #[cfg(feature = "attitude-rate-test")]
     att_rate: attitude_rate::AttitudeRate<T>,
+    /// The accelerometer/GNSS-velocity consistency test
+    /// (`velocity_increment/`).
+    #[cfg(feature = "velocity-increment-test")]
+    vel_inc: velocity_increment::VelocityIncrement<T>,
     history: heapless::HistoryBuf<StateVec<T>, { MAX_DELAY_STEPS + 1 }>,
     report: UkfReport<T>,
 }
@@ -200,6 +210,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             att_rate: attitude_rate::AttitudeRate::new(
                 cfg.attitude_rate.map_or(0.0, |c| c.alpha()),
             ),
+            #[cfg(feature = "velocity-increment-test")]
+            vel_inc: velocity_increment::VelocityIncrement::new(
+                cfg.velocity_increment.map_or(0.0, |c| c.alpha()),
+                cfg.imu_period,
+                cfg.gravity,
+            ),
             history: heapless::HistoryBuf::new(),
             report: UkfReport::default(),
             cfg,
@@ -270,6 +286,28 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.cfg
             .max_nominal_bias
             .unwrap_or_else(|| self.cfg.min_fault * T::lit(MAX_NOMINAL_BIAS_FACTOR))
+    }
+
+    /// The block tests' per-channel limits for the three channels from
+    /// `first` (0: accelerometers, 3: gyros): the nominal-bias bound, and
+    /// the smallest deviation reported, `min_fault × threshold_fraction`,
+    /// as the UKF's own threshold method has it.
+    #[cfg(any(feature = "attitude-rate-test", feature = "velocity-increment-test"))]
+    fn block_limits(&self, first: usize) -> block_test::ChannelLimits<T> {
+        let nominal = self.nominal_bias_bound();
+        let relevant = self.cfg.min_fault * self.cfg.threshold_fraction;
+        block_test::ChannelLimits {
+            nominal: Vector3::new(
+                nominal.get(first).copied().unwrap_or_else(T::zero),
+                nominal.get(first + 1).copied().unwrap_or_else(T::zero),
+                nominal.get(first + 2).copied().unwrap_or_else(T::zero),
+            ),
+            relevant: Vector3::new(
+                relevant.get(first).copied().unwrap_or_else(T::zero),
+                relevant.get(first + 1).copied().unwrap_or_else(T::zero),
+                relevant.get(first + 2).copied().unwrap_or_else(T::zero),
+            ),
+        }
     }
 
     /// One monitor period. Never panics; every anomaly is reported in
@@ -363,6 +401,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             // vehicle moves, which would flag every channel afterwards.
             let u = if usable { *imu } else { self.prev_imu } - self.nominal_bias;
             self.att_rate_sample(imu, dt, usable);
+            self.vel_inc_sample(imu, dt, usable);
             match self.predict(&u, dt) {
                 Ok(reset) => health.covariance_reset |= reset,
                 Err(ModelError::PitchSingularity) => health.pitch_singular = true,
@@ -399,6 +438,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                     Ok((rejected, reset)) => {
                         updated = true;
                         self.att_rate_epoch(&aiding);
+                        self.vel_inc_epoch(&aiding);
                         health.aiding_rejected |= rejected;
                         health.covariance_reset |= reset;
                     }

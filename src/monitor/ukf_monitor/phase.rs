@@ -27,6 +27,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 self.phase = Phase::Monitoring;
                 self.freeze_inflation();
                 self.att_rate_start();
+                self.vel_inc_start();
                 // The fault estimate starts from "no fault", as uncertain
                 // as the smallest fault to detect.
                 if self.tracking_on() {
@@ -55,6 +56,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.inflation_n = [T::zero(); NZ];
         self.inflation = [T::one(); NZ];
         self.att_rate_reset();
+        self.vel_inc_reset();
         for w in self.windows.iter_mut() {
             w.clear();
         }

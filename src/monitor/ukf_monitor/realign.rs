@@ -170,6 +170,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             w.clear();
         }
         self.att_rate_clear();
+        self.vel_inc_clear();
         self.persistence.reset();
         self.stats_holdoff = self.stats_holdoff.max(self.cfg.converge_s);
     }

@@ -6,6 +6,7 @@ use nalgebra::Vector3;
 
 use crate::math::Real;
 use crate::model::{ImuVec, Measurement};
+use crate::monitor::ukf_monitor::block_test::merge_block_flags;
 use crate::monitor::ukf_monitor::UkfMonitor;
 use crate::monitor::{AttitudeRateDetail, ChannelState, Phase};
 
@@ -19,7 +20,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// is off): ratios, flags, estimates, learnt offset, reddening factors
     /// and degrees of freedom.
     pub fn attitude_rate_detail(&self) -> Option<AttitudeRateDetail<T>> {
-        self.attitude_rate_on().then_some(self.att_rate.detail)
+        self.attitude_rate_on().then_some(self.att_rate.test.detail)
     }
 
     /// One IMU sample (raw) into the interval under way; `usable`: the
@@ -67,15 +68,14 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         let att = aiding.z.fixed_rows::<3>(3);
         let euler = [att.x, att.y, att.z];
-        let cap = self.nominal_bias_bound();
-        let bound: Vector3<T> = cap.fixed_rows::<3>(3).into_owned();
+        let limits = self.block_limits(3);
         let external =
             self.phase == Phase::Monitoring
                 && self.report.status.iter().any(|s| {
                     matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative)
                 });
         self.att_rate
-            .epoch(&cfg, euler, &bound, self.cfg.aiding_timeout_s, external);
+            .epoch(&cfg, euler, &limits, self.cfg.aiding_timeout_s, external);
     }
 
     /// Adds the test's flags to the report: a gyro channel the UKF finds
@@ -85,31 +85,18 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         if !self.attitude_rate_on() {
             return;
         }
-        let d = &self.att_rate.detail;
-        for ((st, e), (f, m)) in self
-            .report
-            .status
-            .iter_mut()
-            .zip(self.report.fault_estimate.iter_mut())
-            .skip(3)
-            .zip(d.flag.iter().zip(d.estimate.iter()))
-        {
-            if *f == 0 || !matches!(st, ChannelState::Healthy) {
-                continue;
-            }
-            *st = if *f > 0 {
-                ChannelState::FaultPositive
-            } else {
-                ChannelState::FaultNegative
-            };
-            *e = *m;
-        }
+        merge_block_flags(
+            &mut self.report.status,
+            &mut self.report.fault_estimate,
+            3,
+            &mut self.att_rate.test,
+        );
     }
 
     /// The test is quiet (every ratio below half its threshold) or off: the
     /// UKF's drift tracker may learn.
     pub(in crate::monitor::ukf_monitor) fn att_rate_quiet(&self) -> bool {
-        !self.attitude_rate_on() || self.att_rate.quiet(T::lit(0.5))
+        !self.attitude_rate_on() || self.att_rate.test.quiet(T::lit(0.5))
     }
 
     /// Forgets the intervals and windows (re-alignment).
@@ -124,6 +111,6 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
 
     /// Decisions start (monitoring).
     pub(in crate::monitor::ukf_monitor) fn att_rate_start(&mut self) {
-        self.att_rate.start_judging();
+        self.att_rate.test.start_judging();
     }
 }

@@ -33,111 +33,29 @@
 //! `aiding_timeout_s`, an invalid IMU sample or held statistics drop the
 //! interval.
 //!
-//! **What is learnt, and why it gives the false-alarm rate.** Per gyro
-//! channel, from the start of the UKF's learning phase and on while
-//! monitoring: the offset (mean block, the gyro's turn-on bias against the
-//! aiding; clamped to `max_nominal_bias`, or 20 × `min_fault` as the
-//! nominal-bias learner, so a larger power-up bias is reported), the block
-//! variance `v_B` and each length's reddening factor `ρ_L`, the window
-//! variance over `v_B / L`. A 10-s window variance cannot be learnt from
-//! 20–70 s of flight alone (2–7 independent windows), while `v_B` has
-//! 40–140 blocks: `ρ_L` is therefore a posterior with a white-noise prior
-//! (`ρ = 1`) worth `prior_windows` windows, updated by the window means
-//! the flight has shown, each overlapping window counting `1.5/L`
-//! independent ones (the degrees of freedom of the overlapping-batch-means
-//! variance estimator, Meketon & Schmeiser 1984). On log171 the factors
-//! are 0.56–1.13 at 150 s (the 10-s windows' at 10.5–10.8 degrees of
-//! freedom) and 0.44–1.45 at 234 s (18.6–21.6): better than white where
-//! the aiding's errors telescope, up to 1.45 where they wander. The window mean's
-//! variance is `v_B·ρ_L·(1/L + 1/N)` (`N` blocks in the offset), and the
-//! threshold the Student-t quantile of the per-decision probability
-//! [`AttitudeRateConfig::alpha`] at the degrees of freedom
-//! `prior_windows + 1.5·n_L/L` actually learnt: the false-alarm rate
-//! follows from the data and the design rate, not from a margin. A length
-//! judges once it has `min_dof` degrees of freedom and the offset two
-//! longest windows of blocks.
 //!
-//! **Motion cover.** The spread learnt holds for the motion it was learnt
-//! at: a vehicle at rest shows a tiny one, and judging flight against it
-//! raised alarms at take-off (log171 from 48 s, on the ground until 80 s:
-//! ratios 1.4–3.2 at the first decisions). Each block's mean squared rate
-//! is kept, the learnt blocks are counted per half-decade of it, and a
-//! window is judged only if at least one longest window of learnt blocks
-//! was as active as its mean; until then it neither decides nor stops
-//! learning (so flight gets learnt), and a flag it raised is kept, not
-//! cleared (not judged is not nominal).
-//!
-//! **No learning during a fault.** A block is learnt (offset, `v_B`, and
-//! the windows that end at it) only once every decision that saw it has
-//! been made, and only on the channels where all of those stayed below
-//! `learn_below` of the threshold and no channel of the UKF was flagged.
-//!
-//! **Decisions.** The largest score/threshold ratio over the lengths, with
-//! its sign; `confirm` consecutive ratios above 1 with one sign flag the
-//! channel, with the window mean (less the offset) as its size. The flag
-//! holds for `hold` blocks after the last confirmed decision and then
-//! clears. **The way back to nominal**: a 10-s window holds a fault for
-//! 10 s after it has ended, so a longer window's verdict is withdrawn as
-//! soon as the newest shortest window contradicts it (falls short of the
-//! longer window's deviation, in its sign, by more than the shortest
-//! window's own threshold deviation: under a persisting fault that has
-//! the test's per-decision probability); the longer lengths are then
-//! muted on that channel until their windows have flushed, while the
-//! shortest still judges. Without it (a fault small against the shortest
-//! window's spread) the flag clears once no window holds the fault: at
-//! most the longest window plus the hold after the fault ends. Never
-//! stuck: the offset is not learnt meanwhile. A flag is merged into
-//! the UKF's report only on a gyro channel the UKF judges healthy; before
-//! this test can judge it changes nothing (the UKF's test still decides,
-//! and `NotMonitored` stays so).
+//! The blocks are judged and learnt by the machinery both block tests
+//! share (`block_test/`: learnt offset, variance and reddening, Student-t
+//! thresholds, motion cover, gated learning, withdrawal), with the mean
+//! squared rate as the motion measure. A flag is merged into the UKF's
+//! report only on a gyro channel the UKF judges healthy; before this test
+//! can judge it changes nothing (the UKF's test still decides, and
+//! `NotMonitored` stays so).
 
 use nalgebra::{UnitQuaternion, Vector3};
 
+use super::block_test::rotation::{from_euler, inverse_right_jacobian, rotation_exp, rotation_log};
+use super::block_test::{BlockTest, ChannelLimits};
 use crate::math::Real;
-use crate::monitor::{
-    AttitudeRateConfig, AttitudeRateDetail, ATTITUDE_RATE_LENGTHS as NL, ATTITUDE_RATE_MAX_BLOCKS,
-};
-use crate::stats::student_t_upper_quantile;
+use crate::monitor::AttitudeRateConfig;
 
-mod decide;
 mod hooks;
-mod learn;
-mod rotation;
 #[cfg(test)]
 mod tests;
-
-use rotation::{from_euler, inverse_right_jacobian, rotation_exp, rotation_log};
-
-/// Block means kept: a block is learnt once every decision that saw it
-/// has been made (ages up to two longest windows).
-const RING: usize = 2 * ATTITUDE_RATE_MAX_BLOCKS;
-/// Independent windows an overlapping window counts, times its length.
-const OBM_DOF: f64 = 1.5;
-/// Ratio recorded for a block during which the UKF flagged a channel: no
-/// learning from it.
-const EXTERNAL_FLAG_RATIO: f64 = 1e3;
-/// Bins of the learnt blocks' motion (mean squared rate), half a decade
-/// each from 1e-8 (rad/s)² (at rest) up; the last is open.
-const MOTION_BINS: usize = 24;
-const MOTION_LOG10_MIN: f64 = -8.0;
-
-/// The motion bin of a mean squared rate.
-fn motion_bin<T: Real>(m: T) -> usize {
-    let x: f64 = m.to_f64();
-    let l = libm::log10(if x > 1e-30 { x } else { 1e-30 });
-    let b: f64 = libm::floor((l - MOTION_LOG10_MIN) * 2.0);
-    if b <= 0.0 {
-        0
-    } else {
-        (b as usize).min(MOTION_BINS - 1)
-    }
-}
 
 /// The test's state (see the module notes).
 #[derive(Debug, Clone)]
 pub(super) struct AttitudeRate<T> {
-    /// Per-decision false-alarm probability, two-sided.
-    alpha: f64,
     /// The gyro rotation since the reference epoch, its time and
     /// `Σ |ω|² dt` over it.
     gyro: UnitQuaternion<T>,
@@ -145,83 +63,37 @@ pub(super) struct AttitudeRate<T> {
     gyro_motion: T,
     /// `Σ |ω|² dt` of the intervals in the open block.
     sum_motion: T,
-    /// Mean squared rate of each block in the ring.
-    motion: [T; RING],
-    /// Learnt blocks per motion bin (same forgetting as the moments).
-    motion_hist: [T; MOTION_BINS],
     /// The aiding attitude the interval started from.
     reference: Option<UnitQuaternion<T>>,
     /// Sum of the residuals and of their intervals in the open block.
     sum: Vector3<T>,
     sum_dt: T,
-    /// A channel of the UKF was flagged during the open block.
-    external: bool,
-    /// The last `RING` block means, newest at `head − 1`.
-    blocks: [Vector3<T>; RING],
-    /// The largest score/threshold ratio of each block's decision.
-    ratio_at: [Vector3<T>; RING],
-    head: usize,
-    filled: usize,
-    /// Learnt weight (blocks), sum and sum of squares of the block means.
-    n_b: Vector3<T>,
-    s1: Vector3<T>,
-    s2: Vector3<T>,
-    /// Per length: learnt sum of squared window means (about the offset)
-    /// and their count.
-    q_w: [Vector3<T>; NL],
-    n_w: [Vector3<T>; NL],
-    /// Per length and channel: degrees of freedom and Student-t threshold
-    /// last computed (recomputed when the former moves by 1 %).
-    quantile: [[(T, T); 3]; NL],
-    judging: bool,
-    /// Consecutive decisions above threshold per channel, with their sign.
-    run: [(u8, i8); 3],
-    /// Blocks the flag still holds after the last confirmed decision.
-    hold: [u8; 3],
-    /// Blocks the longer lengths stay muted per channel (a fault ended).
-    mute: [u8; 3],
-    /// The length (index) whose decision last confirmed each flag.
-    flag_len: [u8; 3],
-    pub(super) detail: AttitudeRateDetail<T>,
+    /// Blocks, windows, learning and decisions.
+    pub(super) test: BlockTest<T>,
 }
 
 impl<T: Real> AttitudeRate<T> {
     /// An empty test with per-decision probability `alpha`.
     pub fn new(alpha: f64) -> Self {
         Self {
-            alpha,
             gyro: UnitQuaternion::identity(),
             gyro_dt: T::zero(),
             gyro_motion: T::zero(),
             sum_motion: T::zero(),
-            motion: [T::zero(); RING],
-            motion_hist: [T::zero(); MOTION_BINS],
             reference: None,
             sum: Vector3::zeros(),
             sum_dt: T::zero(),
-            external: false,
-            blocks: [Vector3::zeros(); RING],
-            ratio_at: [Vector3::zeros(); RING],
-            head: 0,
-            filled: 0,
-            n_b: Vector3::zeros(),
-            s1: Vector3::zeros(),
-            s2: Vector3::zeros(),
-            q_w: [Vector3::zeros(); NL],
-            n_w: [Vector3::zeros(); NL],
-            quantile: [[(T::zero(), T::zero()); 3]; NL],
-            judging: false,
-            run: [(0, 0); 3],
-            hold: [0; 3],
-            mute: [0; 3],
-            flag_len: [0; 3],
-            detail: AttitudeRateDetail::default(),
+            test: BlockTest::new(alpha),
         }
     }
 
     /// Starts afresh (learning restarted).
     pub fn reset(&mut self) {
-        *self = Self::new(self.alpha);
+        self.invalidate();
+        self.sum = Vector3::zeros();
+        self.sum_dt = T::zero();
+        self.sum_motion = T::zero();
+        self.test.reset();
     }
 
     /// Forgets the interval, the open block, the block means and the
@@ -231,18 +103,7 @@ impl<T: Real> AttitudeRate<T> {
         self.sum = Vector3::zeros();
         self.sum_dt = T::zero();
         self.sum_motion = T::zero();
-        self.filled = 0;
-        self.run = [(0, 0); 3];
-        self.hold = [0; 3];
-        self.mute = [0; 3];
-        self.detail.flag = [0; 3];
-        self.detail.estimate = [T::zero(); 3];
-        self.detail.ratio = [T::zero(); 3];
-    }
-
-    /// Decisions start (monitoring).
-    pub fn start_judging(&mut self) {
-        self.judging = true;
+        self.test.clear_windows();
     }
 
     /// Drops the interval under way: the next attitude epoch only sets the
@@ -263,27 +124,21 @@ impl<T: Real> AttitudeRate<T> {
         }
     }
 
-    /// The largest ratio of the last decision is below `fraction` on every
-    /// channel.
-    pub fn quiet(&self, fraction: T) -> bool {
-        self.detail.ratio.iter().all(|r| *r < fraction)
-    }
-
     /// An attitude-aiding epoch (ZYX Euler angles of body→NED), closing
-    /// the interval; decides and learns when it closes a block. `bound`:
-    /// the largest offset per gyro channel; `max_interval`: longer
+    /// the interval; decides and learns when it closes a block. `limits`:
+    /// the gyro channels' (largest offset, smallest deviation reported); `max_interval`: longer
     /// intervals are dropped; `external`: a UKF channel is flagged.
     pub fn epoch(
         &mut self,
         cfg: &AttitudeRateConfig<T>,
         euler: [T; 3],
-        bound: &Vector3<T>,
+        limits: &ChannelLimits<T>,
         max_interval: T,
         external: bool,
     ) {
         let [r, p, y] = euler;
         let aid = from_euler(r, p, y);
-        self.external |= external;
+        self.test.mark_external(external);
         let interval = self.gyro_dt;
         if let Some(reference) = self.reference {
             if interval > T::zero() && interval <= max_interval {
@@ -311,105 +166,7 @@ impl<T: Real> AttitudeRate<T> {
             self.sum = Vector3::zeros();
             self.sum_dt = T::zero();
             self.sum_motion = T::zero();
-            self.close_block(cfg, mean, motion, bound);
+            self.test.close_block(cfg, mean, motion, limits);
         }
-    }
-
-    /// Ring index of the block `age` blocks before the newest.
-    fn slot(&self, age: usize) -> Option<usize> {
-        (age < self.filled).then(|| (self.head + RING - 1 - age) % RING)
-    }
-
-    /// Mean of the `len` blocks ending `age` blocks before the newest.
-    fn window(&self, age: usize, len: usize) -> Option<Vector3<T>> {
-        if len == 0 || self.filled < age + len {
-            return None;
-        }
-        let mut s = Vector3::zeros();
-        for a in age..age + len {
-            s += self.blocks.get(self.slot(a)?)?;
-        }
-        Some(s / T::lit(len as f64))
-    }
-
-    fn close_block(
-        &mut self,
-        cfg: &AttitudeRateConfig<T>,
-        mean: Vector3<T>,
-        motion: T,
-        bound: &Vector3<T>,
-    ) {
-        if let Some(b) = self.blocks.get_mut(self.head) {
-            *b = mean;
-        }
-        if let Some(m) = self.motion.get_mut(self.head) {
-            *m = motion;
-        }
-        let ext = if self.external {
-            T::lit(EXTERNAL_FLAG_RATIO)
-        } else {
-            T::zero()
-        };
-        if let Some(r) = self.ratio_at.get_mut(self.head) {
-            *r = Vector3::from_element(ext);
-        }
-        self.external = false;
-        self.head = (self.head + 1) % RING;
-        self.filled = (self.filled + 1).min(RING);
-        if self.judging {
-            self.decide(cfg, bound);
-        }
-        self.learn(cfg);
-    }
-
-    /// The learnt offset (unclamped mean), block variance and block count
-    /// of channel `c`.
-    fn moments(&self, c: usize) -> Option<(T, T, T)> {
-        let n = *self.n_b.get(c)?;
-        if n <= T::one() {
-            return None;
-        }
-        let m = *self.s1.get(c)? / n;
-        let v = (*self.s2.get(c)? / n - m * m).fmax(T::zero());
-        Some((m, v, n))
-    }
-
-    /// The learnt variance of length `k`'s window mean on channel `c` and
-    /// its degrees of freedom (module notes).
-    fn window_variance(
-        &mut self,
-        cfg: &AttitudeRateConfig<T>,
-        k: usize,
-        c: usize,
-    ) -> Option<(T, T)> {
-        let len = T::lit(f64::from(*cfg.lengths.get(k)?));
-        let (_, vb, n) = self.moments(c)?;
-        if vb <= T::zero() {
-            return None;
-        }
-        let qw = *self.q_w.get(k)?.get(c)?;
-        let nw = *self.n_w.get(k)?.get(c)?;
-        let white = vb / len;
-        let n_eff = nw * T::lit(OBM_DOF) / len;
-        let nu = cfg.prior_windows + n_eff;
-        let rho_hat = if nw > T::zero() {
-            qw / nw / white
-        } else {
-            T::one()
-        };
-        let rho = (cfg.prior_windows + n_eff * rho_hat) / nu;
-        Some((vb * rho * (T::one() / len + T::one() / n), nu))
-    }
-
-    /// The Student-t threshold at `nu` degrees of freedom, cached per
-    /// length and channel.
-    fn threshold(&mut self, k: usize, c: usize, nu: T) -> Option<T> {
-        let alpha = self.alpha;
-        let slot = self.quantile.get_mut(k)?.get_mut(c)?;
-        if (slot.0 - nu).abs() > nu * T::lit(0.01) {
-            let t = student_t_upper_quantile(alpha * 0.5, nu.to_f64()).ok()?;
-            *slot = (nu, T::lit(t));
-        }
-        Some(slot.1)
     }
 }

@@ -1,11 +1,11 @@
-//! The attitude-rate test's gated learning: offset, block variance,
+//! The block test's gated learning: offset, block variance,
 //! reddening per length, and the motion the learnt blocks cover.
 
 use nalgebra::Vector3;
 
 use super::*;
 
-impl<T: Real> AttitudeRate<T> {
+impl<T: Real> BlockTest<T> {
     /// Learnt blocks (forgetting-weighted) at least as active as the
     /// newest window of `len` blocks (its mean squared rate's bin or above).
     pub(super) fn covered(&self, len: usize) -> T {
@@ -26,10 +26,11 @@ impl<T: Real> AttitudeRate<T> {
     /// it has been made) and the windows that end at it, on the channels
     /// where every decision that saw any of their blocks stayed below
     /// `learn_below`.
-    pub(super) fn learn(&mut self, cfg: &AttitudeRateConfig<T>) {
+    pub(super) fn learn(&mut self, cfg: &BlockTestConfig<T>) {
         let longest = usize::from(cfg.lengths[NL - 1]);
         let age = longest - 1;
         let Some(block) = self.slot(age).and_then(|i| self.blocks.get(i)).copied() else {
+            self.prev = [None; 3];
             return;
         };
         let mut worst = Vector3::<T>::zeros();
@@ -50,6 +51,9 @@ impl<T: Real> AttitudeRate<T> {
         }
         for c in 0..3 {
             if !worst.get(c).is_some_and(|r| *r < cfg.learn_below) {
+                if let Some(p) = self.prev.get_mut(c) {
+                    *p = None;
+                }
                 continue;
             }
             let (Some(n), Some(s1), Some(s2), Some(b)) = (
@@ -63,6 +67,18 @@ impl<T: Real> AttitudeRate<T> {
             *n = *n * keep + T::one();
             *s1 = *s1 * keep + *b;
             *s2 = *s2 * keep + *b * *b;
+            let b = *b;
+            if let (Some(Some(p)), Some(n11), Some(s11)) = (
+                self.prev.get(c).copied(),
+                self.n11.get_mut(c),
+                self.s11.get_mut(c),
+            ) {
+                *n11 = *n11 * keep + T::one();
+                *s11 = *s11 * keep + b * p;
+            }
+            if let Some(p) = self.prev.get_mut(c) {
+                *p = Some(b);
+            }
             let mean = *s1 / *n;
             for ((q, nw), w) in self
                 .q_w

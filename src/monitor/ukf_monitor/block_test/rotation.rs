@@ -1,4 +1,4 @@
-//! Rotations for the gyro/attitude-aiding test: `exp` and `log` of SO(3) on
+//! Rotations for the block tests: `exp` and `log` of SO(3) on
 //! unit quaternions (exact at any angle, `log` by `atan2` so that small
 //! angles keep their digits in `f32`), the inverse right Jacobian, and
 //! ZYX Euler angles to a quaternion.
@@ -9,6 +9,7 @@ use crate::math::Real;
 
 /// `log(q)` as a rotation vector, by `atan2` (no `acos` near 1, which
 /// loses half the digits of a small angle in `f32`).
+#[cfg(feature = "attitude-rate-test")] // the gyro test's only
 pub(crate) fn rotation_log<T: Real>(q: &UnitQuaternion<T>) -> Vector3<T> {
     let q = q.quaternion();
     // q and −q are the same rotation: take the short way.
@@ -42,6 +43,7 @@ pub(crate) fn rotation_exp<T: Real>(theta: &Vector3<T>) -> UnitQuaternion<T> {
 /// `log(exp(−φ) ΔR_g) = J_r(φ) δ + O(δ²)`, so this maps the residual back
 /// to the bias exactly to first order at any rate (at 200 °/s over 0.1 s
 /// `J_r` turns a bias by 10°).
+#[cfg(feature = "attitude-rate-test")] // the gyro test's only
 pub(crate) fn inverse_right_jacobian<T: Real>(phi: &Vector3<T>, v: &Vector3<T>) -> Vector3<T> {
     let th2 = phi.norm_squared();
     // 1/θ² − (1 + cos θ)/(2θ sin θ), by its series below 0.1 rad (the
@@ -58,7 +60,7 @@ pub(crate) fn inverse_right_jacobian<T: Real>(phi: &Vector3<T>, v: &Vector3<T>) 
 }
 
 /// The body→NED rotation of ZYX Euler angles (roll, pitch, yaw).
-pub(super) fn from_euler<T: Real>(roll: T, pitch: T, yaw: T) -> UnitQuaternion<T> {
+pub(crate) fn from_euler<T: Real>(roll: T, pitch: T, yaw: T) -> UnitQuaternion<T> {
     let h = T::lit(0.5);
     let (sr, cr) = (roll * h).sin_cos_fast();
     let (sp, cp) = (pitch * h).sin_cos_fast();

@@ -1,13 +1,11 @@
-//! The attitude-rate test's decisions: scores, runs, flags, withdrawal.
-
-use nalgebra::Vector3;
+//! The block test's decisions: scores, runs, flags, withdrawal.
 
 use super::*;
 
-impl<T: Real> AttitudeRate<T> {
+impl<T: Real> BlockTest<T> {
     /// Scores the newest windows of each length, updates the runs, flags
     /// and estimates.
-    pub(super) fn decide(&mut self, cfg: &AttitudeRateConfig<T>, bound: &Vector3<T>) {
+    pub(super) fn decide(&mut self, cfg: &BlockTestConfig<T>, limits: &ChannelLimits<T>) {
         let longest = usize::from(cfg.lengths[NL - 1]);
         let need = T::lit(longest as f64);
         // Per length and channel: the window mean less the offset and the
@@ -44,7 +42,7 @@ impl<T: Real> AttitudeRate<T> {
                 let Some(t) = self.threshold(k, c, nu) else {
                     continue;
                 };
-                let lim = bound.get(c).copied().unwrap_or_else(T::zero);
+                let lim = limits.nominal.get(c).copied().unwrap_or_else(T::zero);
                 let off = m.fmax(-lim).fmin(lim);
                 let (Some(wc), Some(slot)) =
                     (w.get(c), judged.get_mut(k).and_then(|j| j.get_mut(c)))
@@ -62,21 +60,25 @@ impl<T: Real> AttitudeRate<T> {
         let mut worst = [T::zero(); 3];
         for c in 0..3 {
             let col = |k: usize| judged.get(k).and_then(|j| j.get(c)).copied().flatten();
-            // A longer window whose deviation the newest shortest window
-            // contradicts (falls short of it, in its sign, by more than the
-            // shortest window's own threshold deviation: a false rejection
-            // has the test's probability) holds a fault that has ended:
-            // the longer lengths are muted on this channel until their
-            // windows have flushed.
-            if let Some((d0, lim0)) = col(0) {
-                let ended = (1..NL).filter_map(col).any(|(d, lim)| {
-                    let s = if d > T::zero() { T::one() } else { -T::one() };
-                    d.abs() > lim && s * (d - d0) > lim0
-                });
-                if ended {
-                    if let Some(m) = self.mute.get_mut(c) {
-                        *m = cfg.lengths[NL - 1];
-                    }
+            // A longer window whose deviation the newest window of a
+            // shorter length contradicts (falls short of it, in its sign, by
+            // more than the shorter window's own threshold deviation: a
+            // false rejection has the test's probability) holds a fault that
+            // has ended: the longer lengths are muted on this channel until
+            // their windows have flushed. Any shorter length, not only the
+            // shortest: where the aiding's errors telescope a window's
+            // spread falls as 1/L², and the shortest window's threshold may
+            // exceed the longest's whole deviation.
+            let ended = (1..NL).any(|k| {
+                let Some((d, lim)) = col(k) else {
+                    return false;
+                };
+                let s = if d > T::zero() { T::one() } else { -T::one() };
+                d.abs() > lim && (0..k).filter_map(col).any(|(dj, limj)| s * (d - dj) > limj)
+            });
+            if ended {
+                if let Some(m) = self.mute.get_mut(c) {
+                    *m = cfg.lengths[NL - 1];
                 }
             }
             let muted = self.mute.get(c).is_some_and(|m| *m > 0);
@@ -97,6 +99,10 @@ impl<T: Real> AttitudeRate<T> {
                 if muted && k > 0 {
                     continue;
                 }
+                // Flagged only beyond the smallest fault reported as well
+                // (learning stays gated on the statistical ratio above).
+                let floor = limits.relevant.get(c).copied().unwrap_or_else(T::zero);
+                let r = d.abs() / lim.fmax(floor);
                 if let (Some(b), Some(sg), Some(e), Some(bl)) = (
                     best.get_mut(c),
                     sign.get_mut(c),
@@ -119,9 +125,16 @@ impl<T: Real> AttitudeRate<T> {
         for c in 0..3 {
             // A flag raised by a length that cannot judge this window (more
             // active than anything learnt) is kept as it is: not judged is
-            // not nominal. The withdrawal (a fault that ended) still clears it.
+            // not nominal. The withdrawal (a fault that ended) still clears
+            // it, and so does the end of its evidence: once one longest
+            // window has passed since the last confirmed decision, no window
+            // holds a block that raised it (simulated aircraft, the
+            // velocity-increment test learning little between episodes: a
+            // flag kept blind reappeared 11 s after a step had ended).
             let raised_by = self.flag_len.get(c).copied().unwrap_or(0);
-            let blind = self.detail.flag.get(c).is_some_and(|f| *f != 0)
+            let since = self.since_confirm.get(c).copied().unwrap_or(u8::MAX);
+            let blind = since < cfg.lengths[NL - 1]
+                && self.detail.flag.get(c).is_some_and(|f| *f != 0)
                 && uncovered
                     .get(usize::from(raised_by))
                     .copied()
@@ -129,6 +142,9 @@ impl<T: Real> AttitudeRate<T> {
                 && best.get(c).is_some_and(|r| *r <= T::one())
                 && self.mute.get(c).is_none_or(|m| *m == 0);
             if blind {
+                if let Some(sc) = self.since_confirm.get_mut(c) {
+                    *sc = sc.saturating_add(1);
+                }
                 continue;
             }
             let (Some(r), Some(sg), Some(run), Some(hold), Some(flag), Some(e), Some(out)) = (
@@ -151,7 +167,19 @@ impl<T: Real> AttitudeRate<T> {
             } else {
                 *run = (0, 0);
             }
+            if let Some(sc) = self.since_confirm.get_mut(c) {
+                *sc = if run.0 >= cfg.confirm {
+                    0
+                } else {
+                    sc.saturating_add(1)
+                };
+            }
             if run.0 >= cfg.confirm {
+                // Confirmed on windows free of the UKF's own flags?
+                if let (Some(cl), Some(m)) = (self.confirmed_clean.get_mut(c), self.ukf_mask.get(c))
+                {
+                    *cl = *m == 0;
+                }
                 *flag = run.1;
                 *hold = hold_blocks;
                 *out = *e;

@@ -1,0 +1,125 @@
+//! The UKF monitor's side of the accelerometer/GNSS-velocity test: feeding
+//! it the IMU samples and the aiding epochs, merging its flags into the
+//! report (accelerometer channels), and resetting it with the monitor.
+
+use nalgebra::Vector3;
+
+use crate::math::Real;
+use crate::model::{ImuVec, Measurement};
+use crate::monitor::ukf_monitor::block_test::merge_block_flags;
+use crate::monitor::ukf_monitor::UkfMonitor;
+use crate::monitor::{ChannelState, Phase, VelocityIncrementDetail};
+
+impl<T: Real, const W: usize> UkfMonitor<T, W> {
+    /// The test runs (configured; compiled in, as this file is).
+    fn vel_inc_on(&self) -> bool {
+        self.cfg.velocity_increment.is_some()
+    }
+
+    /// Learning or monitoring, statistics not held: the test integrates.
+    fn vel_inc_live(&self) -> bool {
+        matches!(self.phase, Phase::Learning | Phase::Monitoring) && self.stats_holdoff <= T::zero()
+    }
+
+    /// What the accelerometer/GNSS-velocity consistency test shows (`None`
+    /// when it is off): ratios, flags, estimates, learnt offset, reddening
+    /// factors and degrees of freedom, in m/s².
+    pub fn velocity_increment_detail(&self) -> Option<VelocityIncrementDetail<T>> {
+        self.vel_inc_on().then_some(self.vel_inc.test.detail)
+    }
+
+    /// The GNSS velocity lag the accelerometer/GNSS-velocity test uses, s
+    /// (`None` when it is off).
+    pub fn velocity_increment_lag(&self) -> Option<T> {
+        self.vel_inc_on().then(|| self.vel_inc.lag_s())
+    }
+
+    /// One IMU sample (raw); `usable`: valid (else the ring is dropped).
+    pub(in crate::monitor::ukf_monitor) fn vel_inc_sample(
+        &mut self,
+        imu: &ImuVec<T>,
+        dt: T,
+        usable: bool,
+    ) {
+        if !self.vel_inc_on() {
+            return;
+        }
+        if usable && self.vel_inc_live() {
+            let f: Vector3<T> = imu.fixed_rows::<3>(0).into_owned();
+            let w: Vector3<T> = imu.fixed_rows::<3>(3).into_owned();
+            self.vel_inc.integrate(&f, &w, dt);
+        } else {
+            self.vel_inc.invalidate();
+        }
+    }
+
+    /// After an aiding update: an attitude epoch sets the rotation; a
+    /// velocity epoch the UKF fused closes the interval (one it rejected is
+    /// skipped: the IMU integrates on).
+    pub(in crate::monitor::ukf_monitor) fn vel_inc_epoch(&mut self, aiding: &Measurement<T>) {
+        let Some(cfg) = self.cfg.velocity_increment else {
+            return;
+        };
+        if !self.vel_inc_live() {
+            self.vel_inc.invalidate();
+            return;
+        }
+        if aiding.available.iter().skip(3).all(|a| *a) {
+            let att = aiding.z.fixed_rows::<3>(3);
+            self.vel_inc.attitude_epoch([att.x, att.y, att.z]);
+        }
+        let fused = self
+            .report
+            .detail
+            .diag
+            .iter()
+            .take(3)
+            .all(|d| d.available && d.fused);
+        if !fused || !aiding.available.iter().take(3).all(|a| *a) {
+            return;
+        }
+        let v: Vector3<T> = aiding.z.fixed_rows::<3>(0).into_owned();
+        let limits = self.block_limits(0);
+        let external =
+            self.phase == Phase::Monitoring
+                && self.report.status.iter().any(|s| {
+                    matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative)
+                });
+        self.vel_inc
+            .velocity_epoch(&cfg, v, &limits, self.cfg.aiding_timeout_s, external);
+    }
+
+    /// Adds the test's flags to the report: an accelerometer channel the
+    /// UKF finds healthy is reported faulty while the test flags it, with
+    /// the window mean as its estimate.
+    pub(in crate::monitor::ukf_monitor) fn vel_inc_apply(&mut self) {
+        if self.vel_inc_on() {
+            merge_block_flags(
+                &mut self.report.status,
+                &mut self.report.fault_estimate,
+                0,
+                &mut self.vel_inc.test,
+            );
+        }
+    }
+
+    /// The test is quiet (every ratio below half its threshold) or off.
+    pub(in crate::monitor::ukf_monitor) fn vel_inc_quiet(&self) -> bool {
+        !self.vel_inc_on() || self.vel_inc.test.quiet(T::lit(0.5))
+    }
+
+    /// Forgets the intervals and windows (re-alignment).
+    pub(in crate::monitor::ukf_monitor) fn vel_inc_clear(&mut self) {
+        self.vel_inc.clear_windows();
+    }
+
+    /// Starts afresh (learning restarted).
+    pub(in crate::monitor::ukf_monitor) fn vel_inc_reset(&mut self) {
+        self.vel_inc.reset();
+    }
+
+    /// Decisions start (monitoring).
+    pub(in crate::monitor::ukf_monitor) fn vel_inc_start(&mut self) {
+        self.vel_inc.test.start_judging();
+    }
+}
