@@ -4,6 +4,7 @@
 mod align;
 mod attitude_rate_config;
 mod config;
+mod config_error;
 mod input;
 mod otsukf_monitor;
 mod realign;
@@ -17,7 +18,8 @@ pub use attitude_rate_config::{
     VelocityIncrementConfig, VelocityIncrementDetail, ATTITUDE_RATE_LENGTHS,
     ATTITUDE_RATE_MAX_BLOCKS,
 };
-pub use config::{ConfigError, UkfMonitorConfig};
+pub use config::UkfMonitorConfig;
+pub use config_error::ConfigError;
 pub use otsukf_monitor::{OtsukfConfig, OtsukfMonitor};
 pub use report::{
     ChannelState, Health, OtsukfDetail, OtsukfReport, Phase, Report, UkfDetail, UkfReport,
