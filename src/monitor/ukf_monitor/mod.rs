@@ -294,19 +294,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// as the UKF's own threshold method has it.
     #[cfg(any(feature = "attitude-rate-test", feature = "velocity-increment-test"))]
     fn block_limits(&self, first: usize) -> block_test::ChannelLimits<T> {
-        let nominal = self.nominal_bias_bound();
-        let relevant = self.cfg.min_fault * self.cfg.threshold_fraction;
+        let rows = |v: ImuVec<T>| {
+            Vector3::from_fn(|i, _| v.get(first + i).copied().unwrap_or_else(T::zero))
+        };
         block_test::ChannelLimits {
-            nominal: Vector3::new(
-                nominal.get(first).copied().unwrap_or_else(T::zero),
-                nominal.get(first + 1).copied().unwrap_or_else(T::zero),
-                nominal.get(first + 2).copied().unwrap_or_else(T::zero),
-            ),
-            relevant: Vector3::new(
-                relevant.get(first).copied().unwrap_or_else(T::zero),
-                relevant.get(first + 1).copied().unwrap_or_else(T::zero),
-                relevant.get(first + 2).copied().unwrap_or_else(T::zero),
-            ),
+            nominal: rows(self.nominal_bias_bound()),
+            relevant: rows(self.cfg.min_fault * self.cfg.threshold_fraction),
         }
     }
 

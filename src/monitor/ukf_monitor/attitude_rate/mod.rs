@@ -89,10 +89,7 @@ impl<T: Real> AttitudeRate<T> {
 
     /// Starts afresh (learning restarted).
     pub fn reset(&mut self) {
-        self.invalidate();
-        self.sum = Vector3::zeros();
-        self.sum_dt = T::zero();
-        self.sum_motion = T::zero();
+        self.clear_windows();
         self.test.reset();
     }
 
