@@ -75,6 +75,9 @@ use crate::stats::student_t_upper_quantile;
 mod decide;
 mod learn;
 mod merge;
+mod motion_variance;
+#[cfg(test)]
+mod motion_variance_tests;
 pub(super) use merge::merge_block_flags;
 pub(super) mod rotation;
 
@@ -150,6 +153,9 @@ pub(super) struct BlockTest<T> {
     /// and their count.
     q_w: [Vector3<T>; NL],
     n_w: [Vector3<T>; NL],
+    /// Per channel: the learnt sums `Σ1, Σm, Σm², Σd², Σd²m` of the block
+    /// variance's regression on motion (`motion_variance`).
+    motion_var: [Vector3<T>; 5],
     /// Per length and channel: degrees of freedom and Student-t threshold
     /// last computed (recomputed when the former moves by 1 %).
     quantile: [[(T, T); 3]; NL],
@@ -193,6 +199,7 @@ impl<T: Real> BlockTest<T> {
             prev: [None; 3],
             q_w: [Vector3::zeros(); NL],
             n_w: [Vector3::zeros(); NL],
+            motion_var: [Vector3::zeros(); 5],
             quantile: [[(T::zero(), T::zero()); 3]; NL],
             judging: false,
             run: [(0, 0); 3],
@@ -356,9 +363,16 @@ impl<T: Real> BlockTest<T> {
         Some((m, v, n))
     }
 
-    /// The learnt variance of length `k`'s window mean on channel `c` and
-    /// its degrees of freedom (module notes).
-    fn window_variance(&mut self, cfg: &BlockTestConfig<T>, k: usize, c: usize) -> Option<(T, T)> {
+    /// The learnt variance of length `k`'s window mean on channel `c`, for
+    /// a window of mean motion factor `h` (`motion_variance`), and its
+    /// degrees of freedom (module notes).
+    fn window_variance(
+        &mut self,
+        cfg: &BlockTestConfig<T>,
+        k: usize,
+        c: usize,
+        h: T,
+    ) -> Option<(T, T)> {
         let len = T::lit(f64::from(*cfg.lengths.get(k)?));
         let (_, vb, n) = self.moments(c)?;
         if vb <= T::zero() {
@@ -380,7 +394,7 @@ impl<T: Real> BlockTest<T> {
             T::one()
         };
         let rho = (cfg.prior_windows * prior + n_eff * rho_hat) / nu;
-        Some((vb * rho * (T::one() / len + T::one() / n), nu))
+        Some((vb * rho * (h / len + T::one() / n), nu))
     }
 
     /// The reddening of a length-`len` window of a first-order moving
