@@ -22,7 +22,10 @@
 //! are 0.56–1.13 at 150 s (the 10-s windows' at 10.5–10.8 degrees of
 //! freedom) and 0.44–1.45 at 234 s (18.6–21.6): better than white where
 //! the aiding's errors telescope, up to 1.45 where they wander. The window mean's
-//! variance is `v_B·ρ_L·(1/L + 1/N)` (`N` blocks in the offset), and the
+//! variance is `v_B·ρ_L·(h̄/L + 1/N)` (`N` blocks in the offset; `h̄` the
+//! window's mean relative block variance at its blocks' motion, learnt by
+//! regression in `motion_variance`: a turn's blocks spread 2–4× wider
+//! than straight flight's on log171), and the
 //! threshold the Student-t quantile of the per-decision probability
 //! [`AttitudeRateConfig::alpha`] at the degrees of freedom
 //! `prior_windows + 1.5·n_L/L` actually learnt: the false-alarm rate
