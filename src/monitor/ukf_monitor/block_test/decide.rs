@@ -33,7 +33,8 @@ impl<T: Real> BlockTest<T> {
                 if n < T::lit(2.0 * longest as f64) {
                     continue;
                 }
-                let Some((var, nu)) = self.window_variance(cfg, k, c) else {
+                let h = self.window_factor(c, 0, len, longest);
+                let Some((var, nu)) = self.window_variance(cfg, k, c, h) else {
                     continue;
                 };
                 if nu < cfg.min_dof {

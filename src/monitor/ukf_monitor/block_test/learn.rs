@@ -64,6 +64,7 @@ impl<T: Real> BlockTest<T> {
             ) else {
                 continue;
             };
+            let dev = (*n > T::one()).then(|| *b - *s1 / *n);
             *n = *n * keep + T::one();
             *s1 = *s1 * keep + *b;
             *s2 = *s2 * keep + *b * *b;
@@ -79,12 +80,22 @@ impl<T: Real> BlockTest<T> {
             if let Some(p) = self.prev.get_mut(c) {
                 *p = Some(b);
             }
-            let mean = *s1 / *n;
-            for ((q, nw), w) in self
+            if let Some(d) = dev {
+                self.learn_motion_variance(c, d, motion, keep);
+            }
+            let Some((mean, _, _)) = self.moments(c) else {
+                continue;
+            };
+            let mut factors = [T::one(); NL];
+            for (f, len) in factors.iter_mut().zip(cfg.lengths.iter()) {
+                *f = self.window_factor(c, age, usize::from(*len), longest);
+            }
+            for (((q, nw), w), h) in self
                 .q_w
                 .iter_mut()
                 .zip(self.n_w.iter_mut())
                 .zip(windows.iter())
+                .zip(factors.iter())
             {
                 let (Some(q), Some(nw), Some(wc)) = (
                     q.get_mut(c),
@@ -94,7 +105,7 @@ impl<T: Real> BlockTest<T> {
                     continue;
                 };
                 let d = *wc - mean;
-                *q = *q * keep + d * d;
+                *q = *q * keep + d * d / h.fmax(T::lit(1e-6));
                 *nw = *nw * keep + T::one();
             }
         }
@@ -116,7 +127,7 @@ impl<T: Real> BlockTest<T> {
                 *o = m;
             }
             for k in 0..NL {
-                let Some((var, nu)) = self.window_variance(cfg, k, c) else {
+                let Some((var, nu)) = self.window_variance(cfg, k, c, T::one()) else {
                     continue;
                 };
                 let Some((_, vb, n)) = self.moments(c) else {

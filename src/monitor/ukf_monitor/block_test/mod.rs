@@ -22,7 +22,10 @@
 //! are 0.56–1.13 at 150 s (the 10-s windows' at 10.5–10.8 degrees of
 //! freedom) and 0.44–1.45 at 234 s (18.6–21.6): better than white where
 //! the aiding's errors telescope, up to 1.45 where they wander. The window mean's
-//! variance is `v_B·ρ_L·(1/L + 1/N)` (`N` blocks in the offset), and the
+//! variance is `v_B·ρ_L·(h̄/L + 1/N)` (`N` blocks in the offset; `h̄` the
+//! window's mean relative block variance at its blocks' motion, learnt by
+//! regression in `motion_variance`: a turn's blocks spread 2–4× wider
+//! than straight flight's on log171), and the
 //! threshold the Student-t quantile of the per-decision probability
 //! [`AttitudeRateConfig::alpha`] at the degrees of freedom
 //! `prior_windows + 1.5·n_L/L` actually learnt: the false-alarm rate
@@ -75,12 +78,15 @@ use crate::stats::student_t_upper_quantile;
 mod decide;
 mod learn;
 mod merge;
+mod motion_variance;
+#[cfg(test)]
+mod motion_variance_tests;
 pub(super) use merge::merge_block_flags;
 pub(super) mod rotation;
 
 /// Block means kept: a block is learnt once every decision that saw it
 /// has been made (ages up to two longest windows).
-const RING: usize = 2 * ATTITUDE_RATE_MAX_BLOCKS;
+pub(super) const RING: usize = 2 * ATTITUDE_RATE_MAX_BLOCKS;
 /// Independent windows an overlapping window counts, times its length.
 const OBM_DOF: f64 = 1.5;
 /// Ratio recorded for a block during which the UKF flagged a channel: no
@@ -150,6 +156,9 @@ pub(super) struct BlockTest<T> {
     /// and their count.
     q_w: [Vector3<T>; NL],
     n_w: [Vector3<T>; NL],
+    /// Per channel: the learnt sums `Σ1, Σm, Σm², Σd², Σd²m` of the block
+    /// variance's regression on motion (`motion_variance`).
+    motion_var: [Vector3<T>; 5],
     /// Per length and channel: degrees of freedom and Student-t threshold
     /// last computed (recomputed when the former moves by 1 %).
     quantile: [[(T, T); 3]; NL],
@@ -193,6 +202,7 @@ impl<T: Real> BlockTest<T> {
             prev: [None; 3],
             q_w: [Vector3::zeros(); NL],
             n_w: [Vector3::zeros(); NL],
+            motion_var: [Vector3::zeros(); 5],
             quantile: [[(T::zero(), T::zero()); 3]; NL],
             judging: false,
             run: [(0, 0); 3],
@@ -226,6 +236,26 @@ impl<T: Real> BlockTest<T> {
         self.detail.flag = [0; 3];
         self.detail.estimate = [T::zero(); 3];
         self.detail.ratio = [T::zero(); 3];
+    }
+
+    /// Replaces every kept block mean by `mean(slot)` (the same blocks
+    /// measured another way: the velocity-increment test's new GNSS lag),
+    /// keeping what was learnt and the decisions made; `false`, with the
+    /// windows cleared, if one is missing.
+    pub fn replace_means(&mut self, mut mean: impl FnMut(usize) -> Option<Vector3<T>>) -> bool {
+        for age in 0..self.filled {
+            let new = self.slot(age).and_then(|i| Some((i, mean(i)?)));
+            match new.and_then(|(i, m)| Some((self.blocks.get_mut(i)?, m))) {
+                Some((b, m)) => *b = m,
+                None => {
+                    self.clear_windows();
+                    return false;
+                }
+            }
+        }
+        // The last learnt block is of the old lag: no lag-1 pair with it.
+        self.prev = [None; 3];
+        true
     }
 
     /// Decisions start (monitoring).
@@ -336,9 +366,16 @@ impl<T: Real> BlockTest<T> {
         Some((m, v, n))
     }
 
-    /// The learnt variance of length `k`'s window mean on channel `c` and
-    /// its degrees of freedom (module notes).
-    fn window_variance(&mut self, cfg: &BlockTestConfig<T>, k: usize, c: usize) -> Option<(T, T)> {
+    /// The learnt variance of length `k`'s window mean on channel `c`, for
+    /// a window of mean motion factor `h` (`motion_variance`), and its
+    /// degrees of freedom (module notes).
+    fn window_variance(
+        &mut self,
+        cfg: &BlockTestConfig<T>,
+        k: usize,
+        c: usize,
+        h: T,
+    ) -> Option<(T, T)> {
         let len = T::lit(f64::from(*cfg.lengths.get(k)?));
         let (_, vb, n) = self.moments(c)?;
         if vb <= T::zero() {
@@ -360,7 +397,7 @@ impl<T: Real> BlockTest<T> {
             T::one()
         };
         let rho = (cfg.prior_windows * prior + n_eff * rho_hat) / nu;
-        Some((vb * rho * (T::one() / len + T::one() / n), nu))
+        Some((vb * rho * (h / len + T::one() / n), nu))
     }
 
     /// The reddening of a length-`len` window of a first-order moving
