@@ -33,6 +33,10 @@ impl<T: Real> BlockTest<T> {
     /// Adds a learnt block of channel `c` (deviation `d` from the learnt
     /// offset, motion `m`) to the regression, forgetting with `keep`.
     pub(super) fn learn_motion_variance(&mut self, c: usize, d: T, m: T, keep: T) {
+        // A non-finite sample would hold the sums at NaN for good.
+        if !(d.finite() && m.finite()) {
+            return;
+        }
         let d2 = d * d;
         let terms = [T::one(), m, m * m, d2, d2 * m];
         for (acc, x) in self.motion_var.iter_mut().zip(terms.iter()) {
