@@ -4,27 +4,10 @@
 
 // Test code: a panic is a failed assertion.
 #![allow(clippy::unwrap_used, clippy::indexing_slicing)]
+use super::super::block_test::test_noise::Noise;
 use super::*;
 
 const DEG: f64 = core::f64::consts::PI / 180.0;
-
-/// A small deterministic Gaussian source (xorshift + Box–Muller).
-struct Noise(u64);
-impl Noise {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn gauss(&mut self) -> f64 {
-        let (u, v) = (self.uniform(), self.uniform());
-        libm::sqrt(-2.0 * libm::log(u)) * libm::cos(2.0 * core::f64::consts::PI * v)
-    }
-    fn vec(&mut self, s: f64) -> Vector3<f64> {
-        Vector3::new(self.gauss(), self.gauss(), self.gauss()) * s
-    }
-}
 
 /// A body turning at `rate(t)` (rad/s, piecewise constant over each
 /// 100-Hz IMU sample, so the truth is exact), its gyro reading

@@ -81,6 +81,8 @@ mod merge;
 mod motion_variance;
 #[cfg(test)]
 mod motion_variance_tests;
+#[cfg(test)]
+pub(super) mod test_noise;
 pub(super) use merge::merge_block_flags;
 pub(super) mod rotation;
 

@@ -4,22 +4,8 @@
 
 // Test code: a panic is a failed assertion.
 #![allow(clippy::unwrap_used, clippy::indexing_slicing)]
+use super::test_noise::Noise;
 use super::*;
-
-/// A small deterministic Gaussian source (xorshift + Box–Muller).
-struct Noise(u64);
-impl Noise {
-    fn gauss(&mut self) -> f64 {
-        let mut u = || {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-        };
-        let (a, b) = (u(), u());
-        libm::sqrt(-2.0 * libm::log(a)) * libm::cos(2.0 * core::f64::consts::PI * b)
-    }
-}
 
 /// Calm blocks (motion 1, sd `CALM` per axis) and manoeuvring ones
 /// (motion 25, sd `ACTIVE`), in alternating 15-block stretches.

@@ -4,29 +4,12 @@
 
 // Test code: a panic is a failed assertion.
 #![allow(clippy::unwrap_used, clippy::indexing_slicing)]
+use super::super::block_test::test_noise::Noise;
 use super::*;
 use crate::model::G0;
 
 const DEG: f64 = core::f64::consts::PI / 180.0;
 const DT: f64 = 0.01;
-
-/// A small deterministic Gaussian source (xorshift + Box–Muller).
-struct Noise(u64);
-impl Noise {
-    fn gauss(&mut self) -> f64 {
-        let mut u = || {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-        };
-        let (a, b) = (u(), u());
-        libm::sqrt(-2.0 * libm::log(a)) * libm::cos(2.0 * core::f64::consts::PI * b)
-    }
-    fn vec(&mut self, s: f64) -> Vector3<f64> {
-        Vector3::new(self.gauss(), self.gauss(), self.gauss()) * s
-    }
-}
 
 /// The fixed attitude of these tests (roll 10°, pitch −5°, yaw 30°).
 const EULER: [f64; 3] = [10.0 * DEG, -5.0 * DEG, 30.0 * DEG];
