@@ -110,6 +110,21 @@ fn a_constant_attitude_and_acceleration_give_the_body_bias_in_closed_form() {
     }
 }
 
+/// The weaving flight with GNSS velocity 0.3 s late, a constant bias,
+/// 0.3 m/s² accelerometer and 0.02 m/s GNSS noise, from `t0` for `secs`.
+fn weave_late(
+    vi: &mut VelocityIncrement<f64>,
+    cfg: &VelocityIncrementConfig<f64>,
+    t0: f64,
+    secs: f64,
+    n: &mut Noise,
+) {
+    let bias = |_| Vector3::new(0.1, 0.0, -0.2);
+    fly(
+        vi, cfg, t0, secs, weave_a, weave_v, bias, 0.3, n, 0.3, 0.02, 0.0,
+    );
+}
+
 #[test]
 fn the_gnss_lag_is_learnt_from_the_data() {
     // GNSS velocity 0.3 s late on a weaving flight: the lag whose block
@@ -118,20 +133,7 @@ fn the_gnss_lag_is_learnt_from_the_data() {
     let cfg = VelocityIncrementConfig::velocity();
     let mut vi = new_test(&cfg);
     let mut n = Noise(11);
-    fly(
-        &mut vi,
-        &cfg,
-        0.0,
-        90.0,
-        weave_a,
-        weave_v,
-        |_| Vector3::new(0.1, 0.0, -0.2),
-        0.3,
-        &mut n,
-        0.3,
-        0.02,
-        0.0,
-    );
+    weave_late(&mut vi, &cfg, 0.0, 90.0, &mut n);
     assert!((vi.lag_s() - 0.3).abs() < 1e-9, "lag {}", vi.lag_s());
     let d = &vi.diff2;
     assert!(d[3] < 0.5 * d[0], "variation per lag {d:?}");
@@ -148,20 +150,7 @@ fn a_lag_move_swaps_the_kept_blocks_for_the_new_lags_and_keeps_the_windows() {
     let mut moves = 0;
     for s in 0..90 {
         let (lag, filled) = (vi.lag, vi.test.filled);
-        fly(
-            &mut vi,
-            &cfg,
-            f64::from(s),
-            1.0,
-            weave_a,
-            weave_v,
-            |_| Vector3::new(0.1, 0.0, -0.2),
-            0.3,
-            &mut n,
-            0.3,
-            0.02,
-            0.0,
-        );
+        weave_late(&mut vi, &cfg, f64::from(s), 1.0, &mut n);
         if vi.lag != lag {
             moves += 1;
             assert!(vi.test.filled >= filled, "windows restarted at {s} s");
