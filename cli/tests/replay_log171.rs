@@ -214,3 +214,70 @@ fn steps_detected_within_10_s() {
         [[o; 6], [o, o, o, x, x, o], [o, o, o, x, o, o]]
     );
 }
+
+/// The per-row block-test ratios (`ratio_*`, `--out`): with the 0.5 m/s²
+/// a_x step on IMU0 (150–170 s), IMU0's `ratio_ax` stays below 1 while
+/// monitoring before the step and exceeds 1 within 10 s of it, where the
+/// flag follows; every IMU's gyro ratios are written while monitoring;
+/// the OTSUKF, which has no block test, leaves them blank.
+#[test]
+fn per_row_block_test_ratios() {
+    let toml = tmp("ratio-step.toml");
+    std::fs::write(
+        &toml,
+        "[sizes]\naccel = [0.5, 0.0, 0.0]\ngyro = [0.0, 0.0, 0.0]\n\
+         f_unit = [1.0, 0.017453292519943295]\n\
+         [[faults]]\nchannel = 0\nstart = 150.0\nend = 170.0\nkind = \"E1\"\nsign = 1.0\n",
+    )
+    .unwrap();
+    let rows = |monitor: &str| -> Vec<std::collections::HashMap<String, String>> {
+        let out = tmp(&format!("ratio-{monitor}.csv"));
+        let toml = toml.to_str().unwrap();
+        let o = out.to_str().unwrap();
+        replay(&["--monitor", monitor, "--faults", toml, "--out", o]);
+        let text = std::fs::read_to_string(&out).unwrap();
+        let mut lines = text.lines();
+        let head: Vec<String> = lines
+            .next()
+            .unwrap()
+            .split(',')
+            .map(str::to_string)
+            .collect();
+        lines
+            .map(|l| {
+                head.iter()
+                    .cloned()
+                    .zip(l.split(',').map(str::to_string))
+                    .collect()
+            })
+            .collect()
+    };
+    let num = |r: &std::collections::HashMap<String, String>, k: &str| -> Option<f64> {
+        r[k].parse().ok()
+    };
+    let ukf = rows("ukf");
+    let monitoring: Vec<_> = ukf.iter().filter(|r| r["phase"] == "monitoring").collect();
+    let t = |r: &&std::collections::HashMap<String, String>| num(r, "t").unwrap();
+    let before = monitoring
+        .iter()
+        .filter(|r| t(r) < 150.0)
+        .filter_map(|r| num(r, "ratio_ax"))
+        .fold(0.0f64, f64::max);
+    let after = monitoring
+        .iter()
+        .filter(|r| (150.0..160.0).contains(&t(r)))
+        .filter_map(|r| num(r, "ratio_ax"))
+        .fold(0.0f64, f64::max);
+    assert!(before < 1.0, "fault-free ratio up to {before}");
+    assert!(after > 1.0, "the step's ratio only {after}");
+    for k in ["ratio_gz", "imu1_ratio_gx", "imu2_ratio_gy"] {
+        assert!(
+            monitoring.iter().all(|r| num(r, k).is_some()),
+            "{k} blank while monitoring"
+        );
+    }
+    let otsukf = rows("otsukf");
+    assert!(otsukf
+        .iter()
+        .all(|r| r["ratio_ax"].is_empty() && r["imu2_ratio_gz"].is_empty()));
+}

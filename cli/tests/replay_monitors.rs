@@ -207,12 +207,15 @@ fn both_monitors_replay_a_dataflash_log_with_one_json_shape() {
                 );
             }
         }
-        // One per-row layout: phase, flags, estimates, σ per IMU.
+        // One per-row layout: phase, flags, estimates, σ, block-test
+        // ratios per IMU.
         let header = std::fs::read_to_string(&out).unwrap();
         let header = header.lines().next().unwrap();
         assert!(
             header.contains(",imu1_phase,imu1_flag_ax,")
-                && header.contains(",imu1_fhat_gz,imu1_fsig_ax,"),
+                && header.contains(",imu1_fhat_gz,imu1_fsig_ax,")
+                && header.contains(",imu1_fsig_gz,imu1_ratio_ax,")
+                && header.ends_with(",imu2_ratio_gz"),
             "{header}"
         );
     }

@@ -379,10 +379,11 @@ pub fn replay_observed(
             h.push(s.into());
         }
         // One layout for both monitors: `fsig_*` (the fault estimate's σ)
-        // is empty where the monitor does not estimate it (UKF monitor).
+        // is empty where the monitor does not estimate it (UKF monitor),
+        // `ratio_*` (the block tests' ratios) where it has no block test.
         for k in 0..imu_idx.len() {
             h.push(channel_name(k, "phase"));
-            for prefix in ["flag", "fhat", "fsig"] {
+            for prefix in ["flag", "fhat", "fsig", "ratio"] {
                 for c in CHANNEL_NAMES {
                     h.push(channel_name(k, &format!("{prefix}_{c}")));
                 }
@@ -519,10 +520,16 @@ pub fn replay_observed(
                     sum.velocity_increment_offset_m_s2.push(off);
                 }
             }
-            cells.push((r.phase, r.status, r.fault_estimate, r.detail.fault_sigma));
+            cells.push((
+                r.phase,
+                r.status,
+                r.fault_estimate,
+                r.detail.fault_sigma,
+                r.detail.block_ratio,
+            ));
         }
         if let Some(w) = writer.as_mut() {
-            for (phase, status, fhat, fsig) in &cells {
+            for (phase, status, fhat, fsig, ratio) in &cells {
                 record.push(phase_name(*phase).to_string());
                 record.extend(
                     status
@@ -534,6 +541,11 @@ pub fn replay_observed(
                     Some(s) => record.extend(s.iter().map(|v| format!("{v}"))),
                     None => record.extend(std::iter::repeat_n(String::new(), 6)),
                 }
+                record.extend(
+                    ratio
+                        .iter()
+                        .map(|v| v.map_or(String::new(), |v| format!("{v}"))),
+                );
             }
             w.write_record(&record)?;
         }

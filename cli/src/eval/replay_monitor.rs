@@ -41,6 +41,11 @@ pub struct ReplayDetail {
     /// offset per accelerometer axis, m/s² (UKF monitor with the test on;
     /// [`UkfMonitor::velocity_increment_lag`]).
     pub velocity_increment: Option<(f64, [f64; 3])>,
+    /// The block tests' largest score/threshold ratio at their last
+    /// decision per channel (a_x … a_z from the accelerometer/GNSS-velocity
+    /// test, g_x … g_z from the gyro/attitude-aiding test; `None` where the
+    /// test is off or the monitor has none; 0 before it judges).
+    pub block_ratio: [Option<f64>; 6],
 }
 
 /// One monitor of either kind.
@@ -76,14 +81,19 @@ impl ReplayMonitor {
             Self::Ukf(m) => {
                 let r = m.step(imu, dt, aiding);
                 let (delay, heading) = (m.aiding_delay_estimate(), m.heading_offset_estimate());
-                let vel_inc = m
-                    .velocity_increment_lag()
-                    .zip(m.velocity_increment_detail().map(|d| d.offset));
+                let vi = m.velocity_increment_detail();
+                let vel_inc = m.velocity_increment_lag().zip(vi.map(|d| d.offset));
+                let ar = m.attitude_rate_detail();
+                let block_ratio = core::array::from_fn(|i| {
+                    let (d, j) = if i < 3 { (vi, i) } else { (ar, i - 3) };
+                    d.and_then(|d| d.ratio.get(j).copied())
+                });
                 r.map_detail(|d| ReplayDetail {
                     fault_sigma: Some(d.fault_sigma),
                     aiding_delay_s: Some(delay),
                     heading_offset_rad: Some(heading),
                     velocity_increment: vel_inc,
+                    block_ratio,
                     innovation_inflation: Some(d.innovation_inflation),
                     innovations: Some(core::array::from_fn(|i| match d.diag.get(i) {
                         Some(c) if c.available => (c.innovation, c.variance),
@@ -98,6 +108,7 @@ impl ReplayMonitor {
                 aiding_delay_s: None,
                 heading_offset_rad: None,
                 velocity_increment: None,
+                block_ratio: [None; 6],
             }),
         }
     }
