@@ -410,6 +410,21 @@ fn plot_writes_png_and_svg_for_a_ukf_scenario_and_for_s4() {
 }
 
 #[test]
+fn parity_realistic_rejects_flights_of_no_hours() {
+    let o = bin()
+        .args(["parity-realistic", "--hours", "1", "--rounds", "0"])
+        .args(["--flight-hours", "0"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("--flight-hours") && e.lines().count() == 1,
+        "{e}"
+    );
+}
+
+#[test]
 fn parity_realistic_rejects_a_step_onset_inside_training() {
     for bad in ["10", "NaN", "1e9"] {
         let o = bin()

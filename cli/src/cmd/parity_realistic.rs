@@ -5,7 +5,7 @@ use anyhow::{bail, Result};
 
 use hal_sim::array::ArrayKind;
 use hal_sim::realistic::RealisticProfile;
-use imu_fdi_cli::eval::parity_campaign::{fault_free_on, steps_on, STEP_ONSET_S, TRAIN_S};
+use imu_fdi_cli::eval::parity_campaign::{fault_free_flights_on, steps_on, STEP_ONSET_S, TRAIN_S};
 
 // The arguments of `parity-realistic` (help on `Cmd::ParityRealistic`).
 #[derive(clap::Args)]
@@ -13,9 +13,15 @@ pub(crate) struct Args {
     /// gyro, accel or both.
     #[arg(long, default_value = "both")]
     kind: String,
-    /// Fault-free hours (one-hour flights, seeds from `--fault-free-seed`).
+    /// Fault-free hours (flights of `--flight-hours`, seeds from
+    /// `--fault-free-seed`).
     #[arg(long, default_value_t = 10)]
     hours: u32,
+    /// Length of each fault-free flight, h: `--hours` is flown as
+    /// `⌈hours / flight-hours⌉` flights (what the monitor learns over more
+    /// than an hour shows only in longer flights).
+    #[arg(long, default_value_t = 1)]
+    flight_hours: u32,
     /// Rounds of steps per size (18 flights each: IMU × axis × sign).
     #[arg(long, default_value_t = 2)]
     rounds: u64,
@@ -63,6 +69,10 @@ pub(crate) fn run(a: Args) -> Result<()> {
             TRAIN_S + 5.0
         );
     }
+    if a.flight_hours == 0 {
+        bail!("--flight-hours: must be at least 1");
+    }
+    let flights = a.hours.div_ceil(a.flight_hours);
     let profile = if a.integrated {
         RealisticProfile::log171().integrated()
     } else {
@@ -70,7 +80,7 @@ pub(crate) fn run(a: Args) -> Result<()> {
     };
     let mut kinds_json = Vec::new();
     for &kind in kinds {
-        let ff = fault_free_on(&profile, kind, a.hours, a.fault_free_seed)?;
+        let ff = fault_free_flights_on(&profile, kind, flights, a.flight_hours, a.fault_free_seed)?;
         let mut steps_json = Vec::new();
         if !a.json {
             out!(
@@ -143,6 +153,7 @@ pub(crate) fn run(a: Args) -> Result<()> {
             "integrated": a.integrated,
             "step_onset_s": a.step_onset,
             "fault_free_h": ff.hours,
+            "fault_free_flight_h": a.flight_hours,
             "fault_free_alarm_events": ff.alarm_events,
             "fault_free_alarms_per_hour": ff.alarm_events as f64 / ff.hours.max(1e-9),
             "fault_free_isolations": ff.isolations,

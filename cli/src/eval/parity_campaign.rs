@@ -237,8 +237,22 @@ pub fn fault_free_on(
     hours: u32,
     seed: u64,
 ) -> Result<FaultFree> {
-    let profile = profile.with_duration(3600.0 + TRAIN_S);
-    let runs: Vec<_> = (0..u64::from(hours))
+    fault_free_flights_on(profile, kind, hours, 1, seed)
+}
+
+/// [`fault_free_on`] with `flights` flights of `flight_hours` hours each
+/// (seeds `seed..`): what the monitor learns over more than an hour (e.g.
+/// the vibration law's level, docs/parity-real-flights.md) only shows in
+/// flights that long.
+pub fn fault_free_flights_on(
+    profile: &RealisticProfile,
+    kind: ArrayKind,
+    flights: u32,
+    flight_hours: u32,
+    seed: u64,
+) -> Result<FaultFree> {
+    let profile = profile.with_duration(3600.0 * f64::from(flight_hours) + TRAIN_S);
+    let runs: Vec<_> = (0..u64::from(flights))
         .into_par_iter()
         .map(|i| run(kind, &profile, seed + i, None))
         .collect::<Result<_>>()?;
