@@ -6,7 +6,9 @@
 //! cleared and 5 s have passed; fault-free hours raise none either. The
 //! same with the aiding 0.2 s late and the latency estimated online, and
 //! with a 3° heading offset learnt (first onset at 60 s: learning lasts
-//! longer there).
+//! longer there); and with the replay flight profile's block tests on,
+//! with clean, late and heading-offset aiding (the last short of the
+//! targets, asserted as measured).
 //! CI runs 2 seeds; the ignored tests run 20 (+ 20 held out) and 10 h
 //! (`cargo test --release --test aircraft_episodes -- --ignored --nocapture`,
 //! about a minute; the figures are in docs/results.md).
@@ -39,16 +41,28 @@ enum Setup {
     /// Plus the accelerometer/GNSS-velocity consistency test as well
     /// (replay's flight settings; GNSS aiding only).
     BlockTests,
+    /// Both block tests and the online aiding-delay estimate.
+    BlockTestsEstimateDelay,
+    /// Both block tests and the heading-offset estimate.
+    BlockTestsEstimateHeading,
 }
 
 fn config(scn: &Scenario, setup: Setup) -> UkfMonitorConfig<f32> {
     let mut c = monitor_config::<f32>(scn, &RunOptions::default());
-    c.estimate_aiding_delay = matches!(setup, Setup::EstimateDelay);
-    c.estimate_heading_offset = matches!(setup, Setup::EstimateHeading);
-    if matches!(setup, Setup::AttitudeRate | Setup::BlockTests) {
+    c.estimate_aiding_delay =
+        matches!(setup, Setup::EstimateDelay | Setup::BlockTestsEstimateDelay);
+    c.estimate_heading_offset = matches!(
+        setup,
+        Setup::EstimateHeading | Setup::BlockTestsEstimateHeading
+    );
+    let block_tests = matches!(
+        setup,
+        Setup::BlockTests | Setup::BlockTestsEstimateDelay | Setup::BlockTestsEstimateHeading
+    );
+    if block_tests || matches!(setup, Setup::AttitudeRate) {
         c.attitude_rate = Some(imu_fdi::monitor::AttitudeRateConfig::flight());
     }
-    if matches!(setup, Setup::BlockTests) && c.aiding == imu_fdi::model::AidingKind::GnssAttitude {
+    if block_tests && c.aiding == imu_fdi::model::AidingKind::GnssAttitude {
         c.velocity_increment = Some(imu_fdi::monitor::VelocityIncrementConfig::velocity());
     }
     c
@@ -212,6 +226,52 @@ fn aircraft_velocity_increment_test() {
         // events on the design seeds without it.
         assert_eq!(m.false_alarm_events, 0, "{name}");
     }
+}
+
+/// GIVEN aiding 0.2 s late (learnt by the monitor's estimator), WHEN both
+/// block tests run as well (replay's flight settings: the velocity test
+/// learns its own GNSS lag), THEN the targets hold: every episode
+/// detected, step delay median ≤ 1.2 s (as without the tests), ≤ 1
+/// false-alarm event per fault-free hour and after faults clear (measured:
+/// 240/240, 1.16 s, 0 post-clear; 1 event in 9.96 h).
+///
+/// With a 3° heading offset (learnt by the heading estimator) they do
+/// not: the velocity test does not model the offset, which turns the
+/// horizontal `Δv` in turns. Measured on seeds 100–119: 221/240 detected,
+/// 62 post-clear events in 1.00 h (docs/results.md, stop 29). Asserted as
+/// measured so that a change shows here; the flight profile's default
+/// leaves the heading estimator off.
+#[test]
+#[ignore = "40 seeds of episodes and 10 h: run with --release -- --ignored"]
+fn aircraft_block_tests_with_late_or_offset_aiding() {
+    let mut late = Scenario::aircraft_fault_free(0.0);
+    late.aiding.delay_s = 0.2;
+    let t = episodes_with(&late, 100..120, Setup::BlockTestsEstimateDelay);
+    assert_targets_late("aircraft + both block tests, 0.2 s late, seeds 100-119", &t);
+    let mut hour = late.clone();
+    hour.duration_s = 3600.0;
+    let m = fault_free_with(&hour, 700..710, Setup::BlockTestsEstimateDelay);
+    let h = m.free_time_s / 3600.0;
+    println!(
+        "aircraft + both block tests, 0.2 s late, 10 fault-free hours (seeds 700-709): {} false-alarm events in {h:.2} h",
+        m.false_alarm_events
+    );
+    assert!(h > 9.9);
+    assert!(m.false_alarm_events as f64 <= h);
+
+    let mut offset = Scenario::aircraft_fault_free(0.0);
+    offset.aiding.heading_offset_rad = 3f64.to_radians();
+    let t = episodes_with(&offset, 100..120, Setup::BlockTestsEstimateHeading);
+    println!(
+        "aircraft + both block tests, 3° heading offset, seeds 100-119 (short of the targets): {}",
+        t.line()
+    );
+    assert!(t.detected >= 216, "{} detected", t.detected);
+    assert!(
+        t.post_clear_events <= 70,
+        "{} post-clear",
+        t.post_clear_events
+    );
 }
 
 /// GIVEN aiding 0.2 s late, not stated to the monitor, WHEN it estimates

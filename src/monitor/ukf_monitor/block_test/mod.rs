@@ -88,7 +88,7 @@ pub(super) mod rotation;
 
 /// Block means kept: a block is learnt once every decision that saw it
 /// has been made (ages up to two longest windows).
-pub(super) const RING: usize = 2 * ATTITUDE_RATE_MAX_BLOCKS;
+const RING: usize = 2 * ATTITUDE_RATE_MAX_BLOCKS;
 /// Independent windows an overlapping window counts, times its length.
 const OBM_DOF: f64 = 1.5;
 /// Ratio recorded for a block during which the UKF flagged a channel: no
@@ -238,26 +238,6 @@ impl<T: Real> BlockTest<T> {
         self.detail.flag = [0; 3];
         self.detail.estimate = [T::zero(); 3];
         self.detail.ratio = [T::zero(); 3];
-    }
-
-    /// Replaces every kept block mean by `mean(slot)` (the same blocks
-    /// measured another way: the velocity-increment test's new GNSS lag),
-    /// keeping what was learnt and the decisions made; `false`, with the
-    /// windows cleared, if one is missing.
-    pub fn replace_means(&mut self, mut mean: impl FnMut(usize) -> Option<Vector3<T>>) -> bool {
-        for age in 0..self.filled {
-            let new = self.slot(age).and_then(|i| Some((i, mean(i)?)));
-            match new.and_then(|(i, m)| Some((self.blocks.get_mut(i)?, m))) {
-                Some((b, m)) => *b = m,
-                None => {
-                    self.clear_windows();
-                    return false;
-                }
-            }
-        }
-        // The last learnt block is of the old lag: no lag-1 pair with it.
-        self.prev = [None; 3];
-        true
     }
 
     /// Decisions start (monitoring).

@@ -140,32 +140,6 @@ fn the_gnss_lag_is_learnt_from_the_data() {
 }
 
 #[test]
-fn a_lag_move_swaps_the_kept_blocks_for_the_new_lags_and_keeps_the_windows() {
-    // The same flight as above, second by second: when the lag in use
-    // moves, the test keeps its blocks (no restart of the windows) and
-    // each now holds the new lag's estimate of that block.
-    let cfg = VelocityIncrementConfig::velocity();
-    let mut vi = new_test(&cfg);
-    let mut n = Noise(11);
-    let mut moves = 0;
-    for s in 0..90 {
-        let (lag, filled) = (vi.lag, vi.test.filled);
-        weave_late(&mut vi, &cfg, f64::from(s), 1.0, &mut n);
-        if vi.lag != lag {
-            moves += 1;
-            assert!(vi.test.filled >= filled, "windows restarted at {s} s");
-            for age in 0..vi.test.filled {
-                let i = vi.test.slot(age).unwrap();
-                let kept = vi.by_lag[i][vi.lag].unwrap();
-                assert_eq!(vi.test.blocks[i], kept, "block {age} at {s} s");
-            }
-        }
-    }
-    assert!(moves >= 1, "the lag never moved");
-    assert!((vi.lag_s() - 0.3).abs() < 1e-9, "lag {}", vi.lag_s());
-}
-
-#[test]
 fn a_step_is_flagged_with_its_size_and_the_flag_clears_after_it() {
     let cfg = VelocityIncrementConfig::velocity();
     let mut vi = new_test(&cfg);
