@@ -9,17 +9,25 @@ impl<T: Real> BlockTest<T> {
     /// Learnt blocks (forgetting-weighted) at least as active as the
     /// newest window of `len` blocks (its mean squared rate's bin or above).
     pub(super) fn covered(&self, len: usize) -> T {
-        let mut m = T::zero();
-        for a in 0..len {
-            if let Some(v) = self.slot(a).and_then(|i| self.motion.get(i)) {
-                m += *v;
-            }
-        }
-        let b = motion_bin(m / T::lit(len.max(1) as f64));
+        let b = motion_bin(self.mean_motion(0, len).unwrap_or_else(T::zero));
         self.motion_hist
             .iter()
             .skip(b)
             .fold(T::zero(), |s, h| s + *h)
+    }
+
+    /// The mean motion measure of the kept blocks among the `len` ending
+    /// `age` blocks before the newest (`None`: none kept).
+    pub(super) fn mean_motion(&self, age: usize, len: usize) -> Option<T> {
+        let mut s = T::zero();
+        let mut n = 0usize;
+        for a in age..age + len {
+            if let Some(m) = self.slot(a).and_then(|i| self.motion.get(i)) {
+                s += *m;
+                n += 1;
+            }
+        }
+        (n > 0).then(|| s / T::lit(n as f64))
     }
 
     /// Learns the block `longest − 1` blocks back (every decision that saw

@@ -68,8 +68,7 @@ impl<T: Real> BlockTest<T> {
             return T::one();
         }
         let slope = ((get(4) / n - mean_m * mean_d2) / var_m).fmax(T::zero());
-        let at_mean = mean_d2;
-        let a = (mean_d2 - slope * mean_m).fmax(T::lit(MIN_INTERCEPT) * at_mean);
+        let a = (mean_d2 - slope * mean_m).fmax(T::lit(MIN_INTERCEPT) * mean_d2);
         let v = a + slope * mean_m;
         if v <= T::zero() {
             return T::one();
@@ -83,20 +82,11 @@ impl<T: Real> BlockTest<T> {
     }
 
     /// The mean motion factor of channel `c` over the window of `len`
-    /// blocks ending `age` blocks before the newest.
+    /// blocks ending `age` blocks before the newest: `h` is linear in the
+    /// motion, so its mean over the blocks is its value at their mean
+    /// motion (one evaluation per window, not one per block).
     pub(super) fn window_factor(&self, c: usize, age: usize, len: usize, longest: usize) -> T {
-        let mut s = T::zero();
-        let mut n = 0usize;
-        for a in age..age + len {
-            if let Some(m) = self.slot(a).and_then(|i| self.motion.get(i)) {
-                s += self.motion_factor(c, *m, longest);
-                n += 1;
-            }
-        }
-        if n == 0 {
-            T::one()
-        } else {
-            s / T::lit(n as f64)
-        }
+        self.mean_motion(age, len)
+            .map_or_else(T::one, |m| self.motion_factor(c, m, longest))
     }
 }
