@@ -93,7 +93,10 @@ fn dataflash_log_replays_every_imu_and_attributes_common_mode_flags() {
         let c = channel(&s, name);
         let flagged = c["flagged_samples"].as_u64().unwrap();
         assert!(flagged > 1000, "{c}");
-        assert_eq!(c["common_mode_samples"].as_u64().unwrap(), flagged, "{c}");
+        // All of them common mode but for an instant where one IMU's test
+        // did not judge (motion beyond what its inflation was learnt at).
+        let common = c["common_mode_samples"].as_u64().unwrap();
+        assert!(common <= flagged && common * 100 >= flagged * 99, "{c}");
     }
     // Learning with GPS, then faults injected on IMU 1: found on IMU 1 only.
     let faults = tmp("ap-head-faults.toml");
@@ -105,16 +108,34 @@ fn dataflash_log_replays_every_imu_and_attributes_common_mode_flags() {
          [[faults]]\nchannel = 1\nstart = 28.0\nend = 34.0\nkind = \"E1\"\nsign = -1.0\n",
     )
     .unwrap();
-    let o = bin()
-        .args(["replay", bin_log, "--from", "48", "--learn", "10"])
-        .arg("--faults")
-        .arg(&faults)
-        .args(["--fault-offset", "50", "--inject-imu", "1", "--summary"])
-        .arg(&summary)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let s = json(&summary);
+    // The learned inflation followed in flight does not judge the first
+    // seconds after take-off (72.6 s; more active than anything learnt on
+    // the ground: `inflation_cover.rs`), where the a_y step lies: it finds
+    // the g_z step on the ground and nothing else.
+    let replay_head = |memory: &str| {
+        let o = bin()
+            .args(["replay", bin_log, "--from", "48", "--learn", "10"])
+            .arg("--faults")
+            .arg(&faults)
+            .args(["--fault-offset", "50", "--inject-imu", "1"])
+            .args(["--inflation-memory", memory, "--summary"])
+            .arg(&summary)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        json(&summary)
+    };
+    let s = replay_head("120");
+    let gz = channel(&s, "imu1_gz");
+    let t = gz["first_correct_s"].as_f64().unwrap();
+    assert!((65.0..68.5).contains(&t), "{gz}");
+    for c in s["channels"].as_array().unwrap() {
+        if c["channel"] != "imu1_gz" {
+            assert_eq!(c["flagged_samples"], 0, "{c}");
+        }
+    }
+    // Frozen at the end of learning, it judges them.
+    let s = replay_head("0");
     let gz = channel(&s, "imu1_gz");
     let t = gz["first_correct_s"].as_f64().unwrap();
     assert!(

@@ -83,8 +83,16 @@ pub struct UkfMonitorConfig<T> {
     /// assumption. The factor is ≥ 1 (never more sensitive than the
     /// white-noise test), bounded by this value (a fault present during
     /// learning cannot switch detection off), and learned only in the
-    /// learning phase, i.e. frozen while monitoring.
+    /// learning phase, i.e. frozen while monitoring — unless
+    /// [`inflation_memory_s`](Self::inflation_memory_s) is set.
     pub max_innovation_inflation: T,
+    /// Memory of the inflation while monitoring, s (0: frozen at the end
+    /// of learning). With it (feature `inflation-tracking`) the learning
+    /// goes on in flight on quiet epochs with this exponential memory, and
+    /// a window more active than what the inflation was learnt at is not
+    /// judged by the UKF's own test but learnt (`inflation_cover.rs`):
+    /// an inflation learnt on the ground says nothing of flight.
+    pub inflation_memory_s: T,
     /// Time from alignment to the start of learning, s.
     pub converge_s: T,
     /// Duration of the learning phase, s.
@@ -231,6 +239,7 @@ impl<T: Real> UkfMonitorConfig<T> {
             threshold_fraction: T::lit(1.0),
             persistence: 2,
             max_innovation_inflation: T::one(),
+            inflation_memory_s: T::zero(),
             converge_s: T::lit(3.0),
             learn_s: T::lit(7.0),
             max_nominal_bias: None,
@@ -369,7 +378,7 @@ impl<T: Real> UkfMonitorConfig<T> {
         if let Some(&(field, _)) = positive.iter().find(|(_, ok)| !ok) {
             return Err(ConfigError::NonPositive(field));
         }
-        let in_range: [(&'static str, bool); 11] = [
+        let in_range: [(&'static str, bool); 12] = [
             ("lever_arm", self.lever_arm.iter().all(|v| v.finite())),
             (
                 "cos_pitch_min",
@@ -385,6 +394,7 @@ impl<T: Real> UkfMonitorConfig<T> {
                 non_neg(self.sign_deadband) && self.sign_deadband < T::one(),
             ),
             ("converge_s", non_neg(self.converge_s)),
+            ("inflation_memory_s", non_neg(self.inflation_memory_s)),
             (
                 "max_nominal_bias",
                 self.max_nominal_bias

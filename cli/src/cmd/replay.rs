@@ -31,6 +31,12 @@ pub(crate) struct Args {
     /// default 25 for the flight profile, 1 for the simulated one).
     #[arg(long)]
     max_inflation: Option<f64>,
+    /// Memory of the UKF monitor's learned inflation in flight, s (0: frozen
+    /// at the end of learning; default 120 for the flight profile, 0 for
+    /// the simulated one). A window more active than what it was learnt at
+    /// is learnt, not judged by the UKF's own test.
+    #[arg(long)]
+    inflation_memory: Option<f64>,
     /// Print the JSON summary (one object) on stdout; the human-readable
     /// lines go to stderr.
     #[arg(long)]
@@ -148,6 +154,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         summary,
         monitor,
         max_inflation,
+        inflation_memory,
         json,
         grace,
         gnss,
@@ -208,6 +215,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         att_sigma,
         monitor: monitor.into(),
         max_inflation,
+        inflation_memory,
         aiding_delay,
         estimate_heading_offset: heading_offset == HeadingArg::Auto,
         velocity_delay,

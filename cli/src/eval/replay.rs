@@ -316,6 +316,9 @@ pub fn replay_observed(
                 if let Some(m) = opts.max_inflation {
                     c.max_innovation_inflation = m;
                 }
+                if let Some(m) = opts.inflation_memory {
+                    c.inflation_memory_s = m;
+                }
                 c
             }
         };

@@ -46,6 +46,9 @@ pub struct ReplayOptions {
     /// Bound of the learned innovation inflation (UKF monitor; 1 disables;
     /// None: 25 for the flight profile, 1 for the simulated one).
     pub max_inflation: Option<f64>,
+    /// Memory of the learned inflation in flight, s (UKF monitor; 0:
+    /// frozen; None: 120 for the flight profile, 0 for the simulated one).
+    pub inflation_memory: Option<f64>,
     /// Aiding latency (UKF monitor): fixed, or estimated online.
     pub aiding_delay: AidingDelay,
     /// Estimate the attitude aiding's heading offset online (UKF monitor).
@@ -97,6 +100,7 @@ impl Default for ReplayOptions {
             att_sigma: [1.0 * deg, 1.0 * deg, 10.0 * deg],
             monitor: MonitorKind::Ukf,
             max_inflation: None,
+            inflation_memory: None,
             aiding_delay: AidingDelay::default(),
             estimate_heading_offset: false,
             velocity_delay: AidingDelay::default(),
@@ -132,6 +136,9 @@ pub fn flight_config(
     // inflation on the flight's own healthy start (bounded: a fault up to
     // √25 = 5× the white-noise detectable size is still found).
     c.max_innovation_inflation = opts.max_inflation.unwrap_or(25.0);
+    // ... followed in flight: learnt on the ground it says nothing of
+    // flight (log171 from its start: 80–105 events per IMU frozen).
+    c.inflation_memory_s = opts.inflation_memory.unwrap_or(120.0);
     // The tracking fault estimate (the window mean lags and is noisy).
     c.fault_psd = Some(UkfMonitorConfig::fault_tracking_psd());
     // Small gyro biases against an autopilot's wandering attitude: the gyro

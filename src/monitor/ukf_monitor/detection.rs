@@ -8,8 +8,23 @@ use crate::detect::{
     window_evidence, DecisionRule, Statistic, WindowEvidence,
 };
 use crate::math::{keep_rolled, rolled, rolled_mut, Real};
-use crate::model::{ImuVec, NZ};
+use crate::model::{ImuVec, Measurement, NZ};
 use crate::monitor::{ChannelState, Health, Phase};
+
+/// The inflation `n` learnt windows with t² summing to `s` prove: the
+/// one-sided 97.7 % lower bound of their mean over the white value
+/// (`white`: its mean and sd), clamped to `[1, max]`; 1 with fewer than
+/// two windows' worth (see `freeze_inflation`).
+pub(super) fn inflation_factor<T: Real, const W: usize>(s: T, n: T, white: (T, T), max: T) -> T {
+    let (mean, sd) = white;
+    let w = T::lit(W as f64);
+    if n >= T::lit(2.0) * w {
+        let lower = s / n - T::lit(2.0) * sd / (n / w).sqrt_fast();
+        (lower / mean).max(T::one()).min(max)
+    } else {
+        T::one()
+    }
+}
 
 impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// Row scale that turns a raw innovation into a window sample.
@@ -53,18 +68,26 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         match self.phase {
             Phase::Learning => {
                 self.learn_inflation();
+                self.track_inflation(T::one());
                 if let Some(f) = if held { None } else { instant(self) } {
                     let k = (dt_learn / self.cfg.learn_tau_s).min(T::one());
                     self.nominal_bias += f * k;
                 }
             }
             Phase::Monitoring => {
-                self.detect(health);
+                let covered = self.covered();
+                if covered {
+                    self.inflation_at_motion();
+                    self.detect(health);
+                } else {
+                    self.not_judged();
+                }
                 self.att_rate_apply();
                 self.vel_inc_apply();
                 // Not while the gyro/attitude test sees something either: a
                 // slow bias under its threshold is not absorbed.
-                let quiet = self.att_rate_quiet()
+                let quiet = covered
+                    && self.att_rate_quiet()
                     && self.vel_inc_quiet()
                     && self.report.status.iter().all(|s| {
                         !matches!(s, ChannelState::FaultNegative | ChannelState::FaultPositive)
@@ -88,6 +111,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                         let cap = *lim * dt_learn;
                         *b += step.fmax(-cap).fmin(cap);
                     }
+                }
+                // The inflation learns from quiet judged epochs and from
+                // those too active to be judged (`inflation_cover.rs`).
+                if !held && (quiet || !covered) && self.tracking_inflation() {
+                    let keep = T::one() - dt_learn / self.cfg.inflation_memory_s;
+                    self.track_inflation(keep.max(T::zero()));
                 }
             }
             _ => {}
@@ -235,6 +264,78 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
     }
 
+    /// Whether the inflation follows the flight (configured and compiled in).
+    fn tracking_inflation(&self) -> bool {
+        cfg!(feature = "inflation-tracking")
+            && self.cfg.inflation_memory_s > T::zero()
+            && self.cfg.max_innovation_inflation > T::one()
+    }
+
+    /// After a fused aiding epoch: its attitude gives the window's motion
+    /// (`inflation_cover.rs`).
+    pub(super) fn cover_epoch(&mut self, _aiding: &Measurement<T>) {
+        #[cfg(feature = "inflation-tracking")]
+        if self.tracking_inflation() {
+            let att = core::array::from_fn(|i| {
+                let k = 3 + i;
+                let on = _aiding.available.get(k).copied().unwrap_or(false);
+                _aiding.z.get(k).copied().filter(|_| on)
+            });
+            self.cover.observe_attitude(att, self.phase_time, W);
+        }
+    }
+
+    /// The learnt inflation covers this window's motion (always, without
+    /// tracking); if so, the factors in use are the ones learnt at it.
+    pub(in crate::monitor::ukf_monitor) fn covered(&self) -> bool {
+        #[cfg(feature = "inflation-tracking")]
+        if self.tracking_inflation() {
+            return self.cover.covered(T::lit(2.0 * W as f64));
+        }
+        true
+    }
+
+    /// Sets the factors in use to the ones learnt at this window's motion.
+    fn inflation_at_motion(&mut self) {
+        #[cfg(feature = "inflation-tracking")]
+        if self.tracking_inflation() {
+            if let Some(white) = self.white_t2() {
+                let max = self.cfg.max_innovation_inflation;
+                for (c, f) in self.inflation.iter_mut().enumerate() {
+                    let (s, n) = self.cover.tail(c);
+                    *f = inflation_factor::<T, W>(s, n, white, max);
+                }
+            }
+        }
+    }
+
+    /// An epoch the UKF's test does not judge: every channel not monitored
+    /// (a block test may still flag it), no run carried over.
+    fn not_judged(&mut self) {
+        for s in self.report.status.iter_mut() {
+            *s = ChannelState::NotMonitored;
+        }
+        self.report.fault_estimate = ImuVec::zeros();
+        self.report.detail.fault_estimate_window = ImuVec::zeros();
+        self.persistence.reset();
+    }
+
+    /// Learns this epoch's full windows' t² at the window's motion, with
+    /// the memory's factor `keep` (1: no forgetting, in learning).
+    fn track_inflation(&mut self, _keep: T) {
+        #[cfg(feature = "inflation-tracking")]
+        if self.tracking_inflation() {
+            let ev = window_evidence(&self.windows, self.statistic(), self.cfg.outlier_k);
+            let mut t2 = [None; NZ];
+            for ((o, t), full) in t2.iter_mut().zip(ev.tstat.iter()).zip(ev.full.iter()) {
+                if *full {
+                    *o = Some(*t * *t);
+                }
+            }
+            self.cover.learn(&t2, _keep);
+        }
+    }
+
     /// At the end of learning: inflation = what the data prove of mean t²
     /// over its white-noise value. For ν = W − 1 the white t has
     /// `E[t²] = ν/(ν−2)` and `Var[t²] = 3ν²/((ν−2)(ν−4)) − E[t²]²` (normal:
@@ -245,17 +346,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// phase on white data gives 1, not a desensitised test. Channels with
     /// fewer than 2·W windows keep 1.
     pub(super) fn freeze_inflation(&mut self) {
-        let nu = W.saturating_sub(1) as f64;
-        let (white, var) = match self.statistic() {
-            Statistic::Normalized => (1.0, 2.0),
-            _ if nu > 4.0 => {
-                let e2 = nu / (nu - 2.0);
-                (e2, 3.0 * nu * nu / ((nu - 2.0) * (nu - 4.0)) - e2 * e2)
-            }
-            _ => return,
+        let Some(white) = self.white_t2() else {
+            return;
         };
-        let (white, sd) = (T::lit(white), T::lit(var).sqrt_fast());
-        let w = T::lit(W as f64);
         let max = self.cfg.max_innovation_inflation;
         // Once per learning phase: rolled.
         for ((c, s), n) in rolled_mut(&mut self.inflation)
@@ -263,13 +356,23 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             .zip(rolled(&self.inflation_sum))
             .zip(rolled(&self.inflation_n))
         {
-            *c = if *n >= T::lit(2.0) * w {
-                let lower = *s / *n - T::lit(2.0) * sd / (*n / w).sqrt_fast();
-                (lower / white).max(T::one()).min(max)
-            } else {
-                T::one()
-            };
+            *c = inflation_factor::<T, W>(*s, *n, white, max);
         }
+    }
+
+    /// Mean and standard deviation of a white window t² (`None`: the
+    /// statistic has no finite variance at this window length).
+    pub(super) fn white_t2(&self) -> Option<(T, T)> {
+        let nu = W.saturating_sub(1) as f64;
+        let (white, var) = match self.statistic() {
+            Statistic::Normalized => (1.0, 2.0),
+            _ if nu > 4.0 => {
+                let e2 = nu / (nu - 2.0);
+                (e2, 3.0 * nu * nu / ((nu - 2.0) * (nu - 4.0)) - e2 * e2)
+            }
+            _ => return None,
+        };
+        Some((T::lit(white), T::lit(var).sqrt_fast()))
     }
 
     /// IMU channel j is monitored when the innovation channels carrying its

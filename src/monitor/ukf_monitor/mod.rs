@@ -29,6 +29,8 @@ mod fault_track;
 mod filter_step;
 mod heading;
 mod history;
+#[cfg(feature = "inflation-tracking")]
+mod inflation_cover;
 mod phase;
 mod realign;
 #[cfg(feature = "velocity-increment-test")]
@@ -102,6 +104,9 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     /// Σ clipped t² and count over the learning phase, per channel.
     inflation_sum: [T; NZ],
     inflation_n: [T; NZ],
+    /// The motion the learnt inflation covers (`inflation_cover.rs`).
+    #[cfg(feature = "inflation-tracking")]
+    cover: inflation_cover::InflationCover<T>,
     persistence: Persistence<NZ>,
     paper_inv: Option<Mat6<T>>,
     phase: Phase,
@@ -191,6 +196,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             inflation: [T::one(); NZ],
             inflation_sum: [T::zero(); NZ],
             inflation_n: [T::zero(); NZ],
+            #[cfg(feature = "inflation-tracking")]
+            cover: inflation_cover::InflationCover::default(),
             persistence: Persistence::new(cfg.persistence),
             paper_inv,
             phase: Phase::Aligning,
@@ -432,6 +439,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                         updated = true;
                         self.att_rate_epoch(&aiding);
                         self.vel_inc_epoch(&aiding);
+                        self.cover_epoch(&aiding);
                         health.aiding_rejected |= rejected;
                         health.covariance_reset |= reset;
                     }

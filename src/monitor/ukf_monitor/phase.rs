@@ -26,6 +26,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             Some(Phase::Monitoring) => {
                 self.phase = Phase::Monitoring;
                 self.freeze_inflation();
+                #[cfg(feature = "inflation-tracking")]
+                {
+                    let floor = T::lit(2.0 * W as f64);
+                    self.cover.set_need(&self.inflation_n, floor);
+                }
                 self.att_rate_start();
                 self.vel_inc_start();
                 // The fault estimate starts from "no fault", as uncertain
@@ -54,6 +59,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.learn_clock = self.phase_time;
         self.inflation_sum = [T::zero(); NZ];
         self.inflation_n = [T::zero(); NZ];
+        #[cfg(feature = "inflation-tracking")]
+        {
+            self.cover = super::inflation_cover::InflationCover::default();
+        }
         self.inflation = [T::one(); NZ];
         self.att_rate_reset();
         self.vel_inc_reset();

@@ -85,11 +85,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         if !self.attitude_rate_on() {
             return;
         }
+        let unjudged = !self.covered();
         merge_block_flags(
             &mut self.report.status,
             &mut self.report.fault_estimate,
             3,
             &mut self.att_rate.test,
+            unjudged,
         );
     }
 

@@ -104,11 +104,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// the window mean as its estimate.
     pub(in crate::monitor::ukf_monitor) fn vel_inc_apply(&mut self) {
         if self.vel_inc_on() {
+            let unjudged = !self.covered();
             merge_block_flags(
                 &mut self.report.status,
                 &mut self.report.fault_estimate,
                 0,
                 &mut self.vel_inc.test,
+                unjudged,
             );
         }
     }
