@@ -153,7 +153,7 @@ fn estimators_find_no_attitude_lag_and_a_quarter_second_gps_lag() {
 fn fault_free_flag_events_per_imu() {
     let ukf = ["--monitor", "ukf"];
     let auto = ["--monitor", "ukf", "--velocity-delay", "auto"];
-    let cases: [(&[&str], [u64; 3]); 8] = [
+    let cases: [(&[&str], [u64; 3]); 9] = [
         (&ukf, [0, 0, 0]),
         (&[&ukf[..], &["--attitude-rate", "off"]].concat(), [0, 0, 0]),
         (
@@ -173,7 +173,11 @@ fn fault_free_flag_events_per_imu() {
             .concat(),
             [1, 7, 1],
         ),
-        (&["--monitor", "otsukf"], [10, 11, 10]),
+        (&["--monitor", "otsukf"], [1, 1, 1]),
+        (
+            &["--monitor", "otsukf", "--velocity-lag", "0"],
+            [10, 11, 10],
+        ),
         (
             &["--monitor", "otsukf", "--velocity-delay", "auto"],
             [1, 1, 1],

@@ -59,13 +59,23 @@ pub enum ReplayMonitor {
 
 impl ReplayMonitor {
     /// A monitor of `kind` on `base`: the UKF monitor's configuration, or
-    /// the OTSUKF's default around it ([`OtsukfConfig::from_base`]).
-    pub fn new(kind: MonitorKind, base: UkfMonitorConfig<f64>) -> Result<Self> {
+    /// the OTSUKF's default around it ([`OtsukfConfig::from_base`]) with
+    /// `velocity_lag_s` its compensated velocity-aiding latency.
+    pub fn new(
+        kind: MonitorKind,
+        base: UkfMonitorConfig<f64>,
+        velocity_lag_s: f64,
+    ) -> Result<Self> {
         let invalid = |e| anyhow!("invalid monitor configuration: {e:?}");
         Ok(match kind {
             MonitorKind::Ukf => Self::Ukf(Box::new(UkfMonitor::new(base).map_err(invalid)?)),
             MonitorKind::Otsukf => Self::Otsukf(Box::new(
-                OtsukfMonitor::new(OtsukfConfig::from_base(base)).map_err(invalid)?,
+                OtsukfMonitor::new({
+                    let mut c = OtsukfConfig::from_base(base);
+                    c.velocity_lag_s = velocity_lag_s;
+                    c
+                })
+                .map_err(invalid)?,
             )),
         })
     }
@@ -103,7 +113,7 @@ impl ReplayMonitor {
             }
             Self::Otsukf(m) => m.step(imu, dt, aiding).map_detail(|d| ReplayDetail {
                 fault_sigma: Some(d.fault_sigma),
-                innovation_inflation: None,
+                innovation_inflation: Some(d.innovation_inflation),
                 innovations: None,
                 aiding_delay_s: None,
                 heading_offset_rad: None,

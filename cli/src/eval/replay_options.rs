@@ -56,6 +56,11 @@ pub struct ReplayOptions {
     /// describes (the log is at hand: the offline equivalent of delayed
     /// fusion at a known lag).
     pub velocity_delay: AidingDelay,
+    /// OTSUKF: the velocity aiding's latency the monitor compensates itself,
+    /// causally (`OtsukfConfig::velocity_lag_s`), fixed or (`Auto`, the
+    /// default) fitted on each IMU's learning span as `velocity_delay`'s
+    /// `auto` is, in the flight profile with GNSS aiding (0 otherwise).
+    pub velocity_lag: AidingDelay,
     /// Flight profile, UKF monitor: run the gyro/attitude-aiding
     /// consistency test (`UkfMonitorConfig::attitude_rate`, default on).
     pub attitude_rate: bool,
@@ -100,6 +105,7 @@ impl Default for ReplayOptions {
             aiding_delay: AidingDelay::default(),
             estimate_heading_offset: false,
             velocity_delay: AidingDelay::default(),
+            velocity_lag: AidingDelay::Auto,
             attitude_rate: true,
             velocity_increment: true,
         }

@@ -19,7 +19,12 @@ use crate::model::{
 };
 
 mod config;
+mod inflation;
 mod recover;
+mod velocity_lag;
+
+use inflation::Inflation;
+use velocity_lag::{VelocityLag, LAG_RING};
 
 pub use config::OtsukfConfig;
 
@@ -58,6 +63,12 @@ pub struct OtsukfMonitor<T> {
     /// Time left during which nothing is learned and no new fault is
     /// declared: after an unusable or saturated sample, a re-alignment.
     holdoff: T,
+    /// Learned measurement-noise inflation per aiding component.
+    inflation: Inflation<T>,
+    /// The predicted velocity's recent changes (velocity aiding latency).
+    vel_lag: VelocityLag<T>,
+    /// The velocity aiding's latency in IMU periods (0: fused on arrival).
+    lag_steps: usize,
 }
 
 impl<T: Real> OtsukfMonitor<T> {
@@ -98,6 +109,9 @@ impl<T: Real> OtsukfMonitor<T> {
             track: AidingTrack::new(),
             frozen: FrozenCheck::new(),
             holdoff: T::zero(),
+            inflation: Inflation::new(),
+            vel_lag: VelocityLag::new(),
+            lag_steps: cfg.lag_steps(),
             cfg,
         })
     }
@@ -147,13 +161,25 @@ impl<T: Real> OtsukfMonitor<T> {
             self.try_align(aiding, &omega);
             return self.compose(&u_meas, health, false);
         }
+        let v_before = self.predicted_velocity(&omega);
+        let mut propagated = false;
         if dt_ok {
             match self.predict(&u_corr, dt) {
-                Ok(reset) => health.covariance_reset |= reset,
+                Ok(reset) => {
+                    health.covariance_reset |= reset;
+                    propagated = true;
+                }
                 Err(ModelError::PitchSingularity) => health.pitch_singular = true,
                 Err(ModelError::NonFinite) => health.input_invalid = true,
             }
             self.phase_time += dt;
+        }
+        if self.lag_steps > 0 {
+            let dv = match (propagated, v_before, self.predicted_velocity(&omega)) {
+                (true, Some(a), Some(b)) => b - a,
+                _ => Vector3::zeros(),
+            };
+            self.vel_lag.push(dv);
         }
         // Through ±90°: the attitude is re-aligned from the aiding.
         if health.pitch_singular && aiding.any() && self.recover_singular(aiding, &omega) {
@@ -165,11 +191,15 @@ impl<T: Real> OtsukfMonitor<T> {
             if realigned {
                 health.mark_realigned(true);
             }
+            let aiding = self.bring_velocity_forward(&aiding);
             if aiding.any() {
                 updated = self.update(&aiding, &omega, &mut health);
             }
         }
         let quiet = health == Health::default() && self.holdoff <= T::zero();
+        if !quiet {
+            self.inflation.break_blocks();
+        }
         self.advance_phase(quiet);
         if self.phase == Phase::Monitoring {
             self.decide(self.holdoff <= T::zero());
@@ -186,7 +216,10 @@ impl<T: Real> OtsukfMonitor<T> {
         let available = usable_aiding(aiding);
         let x_pred = self.filter.state();
         let hjac = self.meas.jacobian(&x_pred, omega);
-        let r = b.meas_sigma.component_mul(&b.meas_sigma);
+        let mut r = b.meas_sigma.component_mul(&b.meas_sigma);
+        for (v, c) in r.iter_mut().zip(self.inflation.factor().iter()) {
+            *v *= *c;
+        }
         let meas = self.meas;
         let prior_var = self.filter.fault_covariance().diagonal();
         let prior_fault = *self.filter.fault();
@@ -220,6 +253,24 @@ impl<T: Real> OtsukfMonitor<T> {
                         health.aiding_rejected |= !d.fused;
                     }
                 }
+                // Learned on quiet epochs only (no input or aiding flag, no
+                // hold-off): a glitch or an outlier cannot inflate `R`.
+                let quiet = *health == Health::default() && self.holdoff <= T::zero();
+                if self.phase == Phase::Learning && quiet && b.max_innovation_inflation > T::one() {
+                    let len = self.cfg.inflation_block;
+                    for (i, ((d, rf), a)) in out
+                        .bias_free
+                        .diag
+                        .iter()
+                        .zip(out.fault_innovation.iter())
+                        .zip(out.fault_innovation_variance.iter())
+                        .enumerate()
+                    {
+                        if d.fused {
+                            self.inflation.observe(i, *rf, *a, len);
+                        }
+                    }
+                }
                 health.covariance_reset |= out.bias_free.covariance_reset.is_some();
                 true
             }
@@ -240,6 +291,40 @@ impl<T: Real> OtsukfMonitor<T> {
             .reset_state(x, Mat6::from_diagonal(&s.component_mul(&s)));
         self.phase = Phase::Converging;
         self.phase_time = T::zero();
+        self.vel_lag.reset();
+    }
+
+    /// The velocity rows of `h(x̂)` (NED for GNSS, body for a DVL), when
+    /// the velocity aiding's latency is compensated.
+    fn predicted_velocity(&self, omega: &Vector3<T>) -> Option<Vector3<T>> {
+        if self.lag_steps == 0 {
+            return None;
+        }
+        let z = self.meas.predict(&self.filter.state(), omega);
+        Some(z.fixed_rows::<3>(0).into_owned())
+    }
+
+    /// A velocity that describes the vehicle `lag_steps` periods ago,
+    /// brought to now by the IMU-propagated change since
+    /// (`velocity_lag.rs`); not fused until that change is known.
+    fn bring_velocity_forward(&self, aiding: &Measurement<T>) -> Measurement<T> {
+        let mut a = *aiding;
+        if self.lag_steps == 0 || !a.available.iter().take(3).any(|v| *v) {
+            return a;
+        }
+        match self.vel_lag.over(self.lag_steps) {
+            Some(dv) => {
+                for (z, d) in a.z.iter_mut().zip(dv.iter()) {
+                    *z += *d;
+                }
+            }
+            None => {
+                for v in a.available.iter_mut().take(3) {
+                    *v = false;
+                }
+            }
+        }
+        a
     }
 
     #[inline(never)] // own stack frame and one copy (issue 17)
@@ -305,6 +390,7 @@ impl<T: Real> OtsukfMonitor<T> {
                 self.phase = Phase::Learning;
                 self.nominal = ImuVec::zeros();
                 self.learn_count = T::zero();
+                self.inflation.reset();
             }
             Some(Phase::Monitoring) => {
                 // Capped like the innovation monitor's: anything larger
@@ -315,6 +401,9 @@ impl<T: Real> OtsukfMonitor<T> {
                     .zip_map(&b.min_fault, |f, m| f.max(-m * cap).min(m * cap));
                 self.latched = [0; 6];
                 self.phase = Phase::Monitoring;
+                // Frozen from here on: a fault cannot raise its own `R`.
+                // `max_innovation_inflation` 1 keeps the nominal `R`.
+                self.inflation.freeze(b.max_innovation_inflation);
             }
             _ => {}
         }
@@ -386,6 +475,7 @@ impl<T: Real> OtsukfMonitor<T> {
             detail: OtsukfDetail {
                 fault_sigma: pf.diagonal().map(|v| v.max(T::zero()).sqrt_fast()),
                 total_bias: fault,
+                innovation_inflation: *self.inflation.factor(),
             },
         }
     }
