@@ -147,7 +147,7 @@ pub struct UkfMonitorConfig<T> {
     /// OTSUKF's value, on in `replay`'s flight profile.
     pub fault_psd: Option<ImuVec<T>>,
     /// The gyro/attitude-aiding consistency test (issue 15,
-    /// `ukf_monitor/attitude_rate/`): the gyro integrated between
+    /// `monitor/block_test/attitude_rate/`): the gyro integrated between
     /// attitude epochs against the aiding's rotation, summed over windows
     /// of seconds and tested against the spread this flight has shown at
     /// those lengths, for gyro biases against an aiding whose errors
@@ -157,7 +157,7 @@ pub struct UkfMonitorConfig<T> {
     /// the feature `attitude-rate-test`.
     pub attitude_rate: Option<AttitudeRateConfig<T>>,
     /// The accelerometer/GNSS-velocity consistency test (issue 15,
-    /// `ukf_monitor/velocity_increment/`): the raw specific force rotated
+    /// `monitor/block_test/velocity_increment/`): the raw specific force rotated
     /// by the attitude aiding and integrated between GNSS velocity epochs
     /// (at a GNSS lag learnt from the data) against the GNSS velocity
     /// change, as a body-axis bias over windows of seconds, tested like

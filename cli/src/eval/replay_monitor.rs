@@ -111,15 +111,28 @@ impl ReplayMonitor {
                     })),
                 })
             }
-            Self::Otsukf(m) => m.step(imu, dt, aiding).map_detail(|d| ReplayDetail {
-                fault_sigma: Some(d.fault_sigma),
-                innovation_inflation: Some(d.innovation_inflation),
-                innovations: None,
-                aiding_delay_s: None,
-                heading_offset_rad: None,
-                velocity_increment: None,
-                block_ratio: [None; 6],
-            }),
+            Self::Otsukf(m) => {
+                let r = m.step(imu, dt, aiding);
+                let vi = m.velocity_increment_detail();
+                let ar = m.attitude_rate_detail();
+                let block_ratio = core::array::from_fn(|i| {
+                    let (d, j) = if i < 3 {
+                        (vi.map(|v| v.0), i)
+                    } else {
+                        (ar, i - 3)
+                    };
+                    d.and_then(|d| d.ratio.get(j).copied())
+                });
+                r.map_detail(|d| ReplayDetail {
+                    fault_sigma: Some(d.fault_sigma),
+                    innovation_inflation: Some(d.innovation_inflation),
+                    innovations: None,
+                    aiding_delay_s: None,
+                    heading_offset_rad: None,
+                    velocity_increment: vi.map(|(d, lag)| (lag, d.offset)),
+                    block_ratio,
+                })
+            }
         }
     }
 }

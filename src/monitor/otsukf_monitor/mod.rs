@@ -18,6 +18,10 @@ use crate::model::{
     StateVec, VehicleModel, NZ, STATE_ANGLES,
 };
 
+#[cfg(any(feature = "attitude-rate-test", feature = "velocity-increment-test"))]
+mod block_tests;
+#[cfg(not(any(feature = "attitude-rate-test", feature = "velocity-increment-test")))]
+mod block_tests_off;
 mod config;
 mod inflation;
 mod recover;
@@ -27,6 +31,10 @@ use inflation::Inflation;
 use velocity_lag::{VelocityLag, LAG_RING};
 
 pub use config::OtsukfConfig;
+
+/// Largest nominal bias learnt, in `min_fault`s (as the innovation
+/// monitor's): anything larger is a fault present from power-on.
+const NOMINAL_CAP: f64 = 20.0;
 
 /// Statistics pause after an unusable or saturated sample, s.
 const INPUT_HOLDOFF_S: f64 = 0.5;
@@ -69,6 +77,13 @@ pub struct OtsukfMonitor<T> {
     vel_lag: VelocityLag<T>,
     /// The velocity aiding's latency in IMU periods (0: fused on arrival).
     lag_steps: usize,
+    /// The gyro/attitude-aiding block test (`base.attitude_rate`).
+    #[cfg(feature = "attitude-rate-test")]
+    att_rate: crate::monitor::block_test::attitude_rate::AttitudeRate<T>,
+    /// The accelerometer/GNSS-velocity block test
+    /// (`base.velocity_increment`).
+    #[cfg(feature = "velocity-increment-test")]
+    vel_inc: crate::monitor::block_test::velocity_increment::VelocityIncrement<T>,
 }
 
 impl<T: Real> OtsukfMonitor<T> {
@@ -112,6 +127,16 @@ impl<T: Real> OtsukfMonitor<T> {
             inflation: Inflation::new(),
             vel_lag: VelocityLag::new(),
             lag_steps: cfg.lag_steps(),
+            #[cfg(feature = "attitude-rate-test")]
+            att_rate: crate::monitor::block_test::attitude_rate::AttitudeRate::new(
+                b.attitude_rate.map_or(0.0, |c| c.alpha()),
+            ),
+            #[cfg(feature = "velocity-increment-test")]
+            vel_inc: crate::monitor::block_test::velocity_increment::VelocityIncrement::new(
+                b.velocity_increment.map_or(0.0, |c| c.alpha()),
+                b.imu_period,
+                b.gravity,
+            ),
             cfg,
         })
     }
@@ -164,6 +189,7 @@ impl<T: Real> OtsukfMonitor<T> {
         let v_before = self.predicted_velocity(&omega);
         let mut propagated = false;
         if dt_ok {
+            self.blocks_sample(imu, dt, usable);
             match self.predict(&u_corr, dt) {
                 Ok(reset) => {
                     health.covariance_reset |= reset;
@@ -190,10 +216,14 @@ impl<T: Real> OtsukfMonitor<T> {
             let (aiding, realigned) = self.realign_outliers(aiding, &omega);
             if realigned {
                 health.mark_realigned(true);
+                self.blocks_clear();
             }
-            let aiding = self.bring_velocity_forward(&aiding);
-            if aiding.any() {
-                updated = self.update(&aiding, &omega, &mut health);
+            let fused_aiding = self.bring_velocity_forward(&aiding);
+            if fused_aiding.any() {
+                if let Some(fused) = self.update(&fused_aiding, &omega, &mut health) {
+                    updated = true;
+                    self.blocks_epoch(&aiding, &fused);
+                }
             }
         }
         let quiet = health == Health::default() && self.holdoff <= T::zero();
@@ -206,12 +236,20 @@ impl<T: Real> OtsukfMonitor<T> {
         }
         // An unusable sample is not passed on: the corrected sample is the
         // stand-in the filter used (never NaN).
-        self.compose(&u_meas, health, updated)
+        let mut r = self.compose(&u_meas, health, updated);
+        self.blocks_apply(&mut r);
+        r
     }
 
-    /// The two-stage update with the outlier gate; true when applied.
+    /// The two-stage update with the outlier gate; when applied, the
+    /// channels it fused.
     #[inline(never)] // own stack frame and one copy (issue 17)
-    fn update(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>, health: &mut Health) -> bool {
+    fn update(
+        &mut self,
+        aiding: &Measurement<T>,
+        omega: &Vector3<T>,
+        health: &mut Health,
+    ) -> Option<[bool; NZ]> {
         let b = self.cfg.base;
         let available = usable_aiding(aiding);
         let x_pred = self.filter.state();
@@ -272,11 +310,11 @@ impl<T: Real> OtsukfMonitor<T> {
                     }
                 }
                 health.covariance_reset |= out.bias_free.covariance_reset.is_some();
-                true
+                Some(out.bias_free.diag.map(|d| d.fused))
             }
             Err(_) => {
                 health.covariance_reset = true;
-                false
+                None
             }
         }
     }
@@ -391,11 +429,10 @@ impl<T: Real> OtsukfMonitor<T> {
                 self.nominal = ImuVec::zeros();
                 self.learn_count = T::zero();
                 self.inflation.reset();
+                self.blocks_reset();
             }
             Some(Phase::Monitoring) => {
-                // Capped like the innovation monitor's: anything larger
-                // is a fault present from power-on.
-                let cap = T::lit(20.0);
+                let cap = T::lit(NOMINAL_CAP);
                 self.nominal = self
                     .nominal
                     .zip_map(&b.min_fault, |f, m| f.max(-m * cap).min(m * cap));
@@ -404,6 +441,7 @@ impl<T: Real> OtsukfMonitor<T> {
                 // Frozen from here on: a fault cannot raise its own `R`.
                 // `max_innovation_inflation` 1 keeps the nominal `R`.
                 self.inflation.freeze(b.max_innovation_inflation);
+                self.blocks_start();
             }
             _ => {}
         }

@@ -52,12 +52,12 @@
 
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
-use super::block_test::rotation::{from_euler, rotation_exp};
-use super::block_test::{BlockTest, ChannelLimits};
+use super::rotation::{from_euler, rotation_exp};
+use super::{BlockTest, ChannelLimits, EpochContext};
 use crate::math::{try_inverse, Real};
+use crate::model::{ImuVec, Measurement};
 use crate::monitor::VelocityIncrementConfig;
 
-mod hooks;
 #[cfg(test)]
 mod tests;
 
@@ -98,7 +98,7 @@ impl<T: Real> Increment<T> {
 
 /// The test's state (see the module notes).
 #[derive(Debug, Clone)]
-pub(super) struct VelocityIncrement<T> {
+pub(in crate::monitor) struct VelocityIncrement<T> {
     /// The body→NED attitude: the latest aiding epoch carried on by the gyro.
     attitude: Option<UnitQuaternion<T>>,
     /// The last `DELAY_RING` increments, newest at `head − 1`.
@@ -130,7 +130,7 @@ pub(super) struct VelocityIncrement<T> {
     /// Gravity (NED down), m/s².
     gravity: T,
     /// Blocks, windows, learning and decisions.
-    pub(super) test: BlockTest<T>,
+    pub(in crate::monitor) test: BlockTest<T>,
 }
 
 impl<T: Real> VelocityIncrement<T> {
@@ -251,6 +251,43 @@ impl<T: Real> VelocityIncrement<T> {
                 acc.add(s);
             }
         }
+    }
+
+    /// One IMU sample (raw); `live`: the sample was valid and the
+    /// statistics run (else the ring is dropped).
+    pub fn sample(&mut self, imu: &ImuVec<T>, dt: T, live: bool) {
+        if live {
+            let f: Vector3<T> = imu.fixed_rows::<3>(0).into_owned();
+            let w: Vector3<T> = imu.fixed_rows::<3>(3).into_owned();
+            self.integrate(&f, &w, dt);
+        } else {
+            self.invalidate();
+        }
+    }
+
+    /// A monitor's aiding epoch (`aiding` as the filter fuses it): an
+    /// attitude sets the rotation; a velocity the filter fused closes the
+    /// interval ([`velocity_epoch`](Self::velocity_epoch)); one it rejected
+    /// is skipped (the IMU integrates on).
+    pub fn aiding_epoch(
+        &mut self,
+        cfg: &VelocityIncrementConfig<T>,
+        aiding: &Measurement<T>,
+        ctx: &EpochContext<T>,
+    ) {
+        if !ctx.live {
+            self.invalidate();
+            return;
+        }
+        if aiding.available.iter().skip(3).all(|a| *a) {
+            let att = aiding.z.fixed_rows::<3>(3);
+            self.attitude_epoch([att.x, att.y, att.z]);
+        }
+        if !ctx.fused || !aiding.available.iter().take(3).all(|a| *a) {
+            return;
+        }
+        let v: Vector3<T> = aiding.z.fixed_rows::<3>(0).into_owned();
+        self.velocity_epoch(cfg, v, &ctx.limits, ctx.timeout_s, ctx.external);
     }
 
     /// A GNSS velocity epoch (NED, m/s) the UKF fused, closing the

@@ -9,7 +9,7 @@ use crate::monitor::ChannelState;
 /// faulty where `test` flags them and the UKF finds them healthy, with the
 /// test's window mean as the estimate; a channel the UKF flags itself is
 /// noted (see [`BlockTest::reports`]).
-pub(in crate::monitor::ukf_monitor) fn merge_block_flags<T: Real>(
+pub(in crate::monitor) fn merge_block_flags<T: Real>(
     status: &mut [ChannelState; 6],
     estimate: &mut ImuVec<T>,
     first: usize,

@@ -44,18 +44,18 @@
 
 use nalgebra::{UnitQuaternion, Vector3};
 
-use super::block_test::rotation::{from_euler, inverse_right_jacobian, rotation_exp, rotation_log};
-use super::block_test::{BlockTest, ChannelLimits};
+use super::rotation::{from_euler, inverse_right_jacobian, rotation_exp, rotation_log};
+use super::{BlockTest, ChannelLimits, EpochContext};
 use crate::math::Real;
+use crate::model::{ImuVec, Measurement};
 use crate::monitor::AttitudeRateConfig;
 
-mod hooks;
 #[cfg(test)]
 mod tests;
 
 /// The test's state (see the module notes).
 #[derive(Debug, Clone)]
-pub(super) struct AttitudeRate<T> {
+pub(in crate::monitor) struct AttitudeRate<T> {
     /// The gyro rotation since the reference epoch, its time and
     /// `Σ |ω|² dt` over it.
     gyro: UnitQuaternion<T>,
@@ -69,7 +69,7 @@ pub(super) struct AttitudeRate<T> {
     sum: Vector3<T>,
     sum_dt: T,
     /// Blocks, windows, learning and decisions.
-    pub(super) test: BlockTest<T>,
+    pub(in crate::monitor) test: BlockTest<T>,
 }
 
 impl<T: Real> AttitudeRate<T> {
@@ -110,6 +110,39 @@ impl<T: Real> AttitudeRate<T> {
         self.gyro = UnitQuaternion::identity();
         self.gyro_dt = T::zero();
         self.gyro_motion = T::zero();
+    }
+
+    /// One IMU sample (raw) into the interval under way; `live`: the
+    /// sample was valid and the statistics run (else the interval is
+    /// dropped).
+    pub fn sample(&mut self, imu: &ImuVec<T>, dt: T, live: bool) {
+        if live {
+            let rate: Vector3<T> = imu.fixed_rows::<3>(3).into_owned();
+            self.integrate(&rate, dt);
+        } else {
+            self.invalidate();
+        }
+    }
+
+    /// A monitor's aiding epoch: one whose attitude the filter fused closes
+    /// the interval ([`epoch`](Self::epoch)); one it rejected is skipped
+    /// (the gyro integrates on).
+    pub fn aiding_epoch(
+        &mut self,
+        cfg: &AttitudeRateConfig<T>,
+        aiding: &Measurement<T>,
+        ctx: &EpochContext<T>,
+    ) {
+        if !ctx.live {
+            self.invalidate();
+            return;
+        }
+        if !ctx.fused || !aiding.available.iter().skip(3).all(|a| *a) {
+            return;
+        }
+        let att = aiding.z.fixed_rows::<3>(3);
+        let euler = [att.x, att.y, att.z];
+        self.epoch(cfg, euler, &ctx.limits, ctx.timeout_s, ctx.external);
     }
 
     /// One IMU sample's rotation.
