@@ -82,13 +82,20 @@ impl<T: Real> OtsukfMonitor<T> {
     /// After an applied update: `aiding` as it arrived (outliers re-aligned
     /// on), `fused` the channels the filter fused.
     pub(super) fn blocks_epoch(&mut self, aiding: &Measurement<T>, fused: &[bool; NZ]) {
-        let external = self.phase == Phase::Monitoring && self.latched.iter().any(|l| *l != 0);
+        // Nothing is learnt from a block during which the fault estimate
+        // flags a channel the test's residual contains: the gyro test's
+        // holds only the gyros (and the attitude aiding), the velocity
+        // test's the accelerometers and, through the rotation carried
+        // between attitude epochs, the gyros.
+        let monitoring = self.phase == Phase::Monitoring;
+        let flagged = |from: usize| self.latched.iter().skip(from).any(|l| *l != 0);
+        let (ext_gyro, ext_any) = (monitoring && flagged(3), monitoring && flagged(0));
         let ctx = |first: usize, m: &Self| EpochContext {
             live: m.blocks_live(),
             fused: fused.iter().skip(first).take(3).all(|f| *f),
             limits: m.block_limits(first),
             timeout_s: m.cfg.base.aiding_timeout_s,
-            external,
+            external: if first == 3 { ext_gyro } else { ext_any },
         };
         #[cfg(feature = "attitude-rate-test")]
         if let Some(cfg) = self.cfg.base.attitude_rate {
