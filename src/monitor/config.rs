@@ -71,7 +71,9 @@ pub struct UkfMonitorConfig<T> {
     /// Consecutive detections needed to raise or clear a channel flag (AUV
     /// preset 2, aircraft 1; see [`aircraft`](Self::aircraft)).
     pub persistence: u16,
-    /// Upper bound of the learned innovation inflation (1 disables it).
+    /// Upper bound of the learned innovation inflation (1 disables it; the
+    /// OTSUKF monitor bounds its learned `R` inflation by it too,
+    /// `OtsukfConfig::inflation_block`).
     /// During learning the monitor measures, per innovation channel, how
     /// much larger the window t statistic's spread is on this vehicle's
     /// healthy data than the white-noise t distribution says: time
@@ -152,7 +154,8 @@ pub struct UkfMonitorConfig<T> {
     /// of seconds and tested against the spread this flight has shown at
     /// those lengths, for gyro biases against an aiding whose errors
     /// wander (a real autopilot's attitude). Its flags are added to the
-    /// ten-epoch test's on the gyro channels. Off in the presets; on in
+    /// ten-epoch test's on the gyro channels (the OTSUKF monitor's: to its
+    /// fault-estimate test's). Off in the presets; on in
     /// `replay`'s flight profile ([`AttitudeRateConfig::flight`]). Needs
     /// the feature `attitude-rate-test`.
     pub attitude_rate: Option<AttitudeRateConfig<T>>,
@@ -162,7 +165,8 @@ pub struct UkfMonitorConfig<T> {
     /// (at a GNSS lag learnt from the data) against the GNSS velocity
     /// change, as a body-axis bias over windows of seconds, tested like
     /// [`attitude_rate`](Self::attitude_rate). Its flags are added to the
-    /// ten-epoch test's on the accelerometer channels. Off in the presets;
+    /// ten-epoch test's (the OTSUKF's fault-estimate test's) on the
+    /// accelerometer channels. Off in the presets;
     /// on in `replay`'s flight profile ([`VelocityIncrementConfig::velocity`]).
     /// Needs the feature `velocity-increment-test` and GNSS velocity plus
     /// attitude aiding (M2).

@@ -7,8 +7,10 @@ use crate::monitor::{ConfigError, UkfMonitorConfig};
 /// Configuration of [`OtsukfMonitor`](super::OtsukfMonitor).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OtsukfConfig<T> {
-    /// Vehicle, sensors, aiding, start-up timing and minimum faults (the
-    /// detector fields of the innovation monitor are not used).
+    /// Vehicle, sensors, aiding, start-up timing and minimum faults, the
+    /// bound of the learned `R` inflation (`max_innovation_inflation`) and
+    /// the two block tests (`attitude_rate`, `velocity_increment`); the
+    /// innovation monitor's other detector fields are not used.
     pub base: UkfMonitorConfig<T>,
     /// Random-walk power spectral density of the fault model per channel,
     /// ((m/s²)²/s, (rad/s)²/s): `Q^f = psd · dt` per step. It sets how fast a

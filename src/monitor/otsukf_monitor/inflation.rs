@@ -111,3 +111,72 @@ impl<T: Real> Inflation<T> {
         }
     }
 }
+
+#[cfg(all(
+    test,
+    any(feature = "attitude-rate-test", feature = "velocity-increment-test")
+))]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::indexing_slicing)] // test code
+    use super::*;
+    use crate::monitor::block_test::test_noise::Noise;
+
+    /// The factor learnt on component 0 from `n` innovations made by
+    /// `gen`, each with predicted variance 1, in blocks of `len`.
+    fn learn(n: usize, len: u16, max: f64, mut gen: impl FnMut() -> f64) -> f64 {
+        let mut inf = Inflation::<f64>::new();
+        for _ in 0..n {
+            inf.observe(0, gen(), 1.0, len);
+        }
+        inf.freeze(max);
+        inf.factor()[0]
+    }
+
+    #[test]
+    fn consistent_innovations_learn_no_inflation() {
+        let mut g = Noise(7);
+        assert_eq!(learn(2000, 10, 25.0, || g.gauss()), 1.0);
+    }
+
+    #[test]
+    fn innovations_three_times_too_large_learn_their_variance() {
+        let mut g = Noise(11);
+        let c = learn(2000, 10, 25.0, || 3.0 * g.gauss());
+        assert!((7.0..9.5).contains(&c), "{c}");
+        // Bounded: a fault during learning cannot switch detection off.
+        let mut g = Noise(11);
+        assert_eq!(learn(2000, 10, 4.0, || 3.0 * g.gauss()), 4.0);
+    }
+
+    /// Unit-variance AR(1) errors (φ = 0.9): each epoch looks consistent,
+    /// a block mean does not; only the blocks see it.
+    #[test]
+    fn time_correlation_shows_over_blocks_only() {
+        let ar = |seed: u64| {
+            let mut g = Noise(seed);
+            let mut x = 0.0;
+            move || {
+                x = 0.9 * x + (1.0f64 - 0.81).sqrt() * g.gauss();
+                x
+            }
+        };
+        let per_epoch = learn(4000, 1, 25.0, ar(3));
+        let blocks = learn(4000, 10, 25.0, ar(3));
+        assert!(per_epoch < 1.2, "{per_epoch}");
+        assert!(blocks > 3.0, "{blocks}");
+    }
+
+    #[test]
+    fn broken_blocks_and_short_learning_keep_one() {
+        let mut inf = Inflation::<f64>::new();
+        // 30 large epochs, the block broken every 9: no block completes.
+        for k in 0..30 {
+            if k % 9 == 8 {
+                inf.break_blocks();
+            }
+            inf.observe(0, 5.0, 1.0, 10);
+        }
+        inf.freeze(25.0);
+        assert_eq!(inf.factor()[0], 1.0);
+    }
+}

@@ -74,3 +74,28 @@ impl<T: Real> VelocityLag<T> {
         self.filled = 0;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)] // test code
+    use super::*;
+
+    #[test]
+    fn the_change_over_the_lag_is_the_sum_of_the_last_periods() {
+        let mut lag = VelocityLag::<f64>::new();
+        assert_eq!(lag.over(0), Some(Vector3::zeros()));
+        // Around the ring more than once: 1, 2, …, 100 m/s per period on x.
+        for k in 1..=100 {
+            lag.push(Vector3::new(f64::from(k), 0.0, -1.0));
+            assert_eq!(lag.over(k as usize + 1), None);
+        }
+        assert_eq!(lag.over(3).unwrap(), Vector3::new(297.0, 0.0, -3.0));
+        let all: f64 = (37..=100).map(f64::from).sum();
+        assert_eq!(lag.over(LAG_RING).unwrap().x, all);
+        assert_eq!(lag.over(LAG_RING + 1), None);
+        lag.reset();
+        assert_eq!(lag.over(1), None);
+        lag.push(Vector3::new(0.5, 0.0, 0.0));
+        assert_eq!(lag.over(1).unwrap().x, 0.5);
+    }
+}
