@@ -70,6 +70,7 @@
 use nalgebra::Vector3;
 
 use crate::math::Real;
+use crate::model::{ImuVec, Measurement};
 use crate::monitor::{
     BlockTestConfig, BlockTestDetail, ChannelState, ATTITUDE_RATE_LENGTHS as NL,
     ATTITUDE_RATE_MAX_BLOCKS,
@@ -107,6 +108,38 @@ pub(super) struct EpochContext<T> {
     /// The monitor flags a channel itself (monitoring): nothing is learnt
     /// from the block.
     pub external: bool,
+}
+
+/// What both tests share with their monitors: IMU samples integrate while
+/// the statistics run and drop the interval otherwise; an aiding epoch
+/// closes it while they run and drops it otherwise.
+pub(super) trait IntervalTest<T: Real> {
+    /// The test's configuration.
+    type Config;
+    /// Drops the interval under way.
+    fn invalidate(&mut self);
+    /// One valid IMU sample (raw) into the interval.
+    fn integrate_sample(&mut self, imu: &ImuVec<T>, dt: T);
+    /// A live aiding epoch (the test's own use of it).
+    fn close(&mut self, cfg: &Self::Config, aiding: &Measurement<T>, ctx: &EpochContext<T>);
+
+    /// One IMU sample; `live`: valid and the statistics run.
+    fn sample(&mut self, imu: &ImuVec<T>, dt: T, live: bool) {
+        if live {
+            self.integrate_sample(imu, dt);
+        } else {
+            self.invalidate();
+        }
+    }
+
+    /// A monitor's aiding epoch.
+    fn aiding_epoch(&mut self, cfg: &Self::Config, aiding: &Measurement<T>, ctx: &EpochContext<T>) {
+        if ctx.live {
+            self.close(cfg, aiding, ctx);
+        } else {
+            self.invalidate();
+        }
+    }
 }
 
 /// A channel of `status` is flagged (either sign).

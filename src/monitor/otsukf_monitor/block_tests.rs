@@ -16,7 +16,7 @@
 use super::OtsukfMonitor;
 use crate::math::Real;
 use crate::model::{ImuVec, Measurement, NZ};
-use crate::monitor::block_test::{merge_block_flags, ChannelLimits, EpochContext};
+use crate::monitor::block_test::{merge_block_flags, ChannelLimits, EpochContext, IntervalTest};
 use crate::monitor::{AttitudeRateDetail, OtsukfReport, Phase, VelocityIncrementDetail};
 use nalgebra::Vector3;
 
@@ -116,23 +116,19 @@ impl<T: Real> OtsukfMonitor<T> {
         if r.phase != Phase::Monitoring {
             return;
         }
+        let b = &self.cfg.base;
         #[cfg(feature = "velocity-increment-test")]
-        if self.cfg.base.velocity_increment.is_some() {
-            merge_block_flags(
-                &mut r.status,
-                &mut r.fault_estimate,
-                0,
-                &mut self.vel_inc.test,
-            );
-        }
+        let vel = b.velocity_increment.map(|_| &mut self.vel_inc.test);
+        #[cfg(not(feature = "velocity-increment-test"))]
+        let vel: Option<&mut crate::monitor::block_test::BlockTest<T>> = None;
         #[cfg(feature = "attitude-rate-test")]
-        if self.cfg.base.attitude_rate.is_some() {
-            merge_block_flags(
-                &mut r.status,
-                &mut r.fault_estimate,
-                3,
-                &mut self.att_rate.test,
-            );
+        let att = b.attitude_rate.map(|_| &mut self.att_rate.test);
+        #[cfg(not(feature = "attitude-rate-test"))]
+        let att: Option<&mut crate::monitor::block_test::BlockTest<T>> = None;
+        for (first, test) in [(0, vel), (3, att)] {
+            if let Some(t) = test {
+                merge_block_flags(&mut r.status, &mut r.fault_estimate, first, t);
+            }
         }
     }
 

@@ -128,14 +128,10 @@ impl<T: Real> OtsukfMonitor<T> {
             vel_lag: VelocityLag::new(),
             lag_steps: cfg.lag_steps(),
             #[cfg(feature = "attitude-rate-test")]
-            att_rate: crate::monitor::block_test::attitude_rate::AttitudeRate::new(
-                b.attitude_rate.map_or(0.0, |c| c.alpha()),
-            ),
+            att_rate: crate::monitor::block_test::attitude_rate::AttitudeRate::for_config(b),
             #[cfg(feature = "velocity-increment-test")]
-            vel_inc: crate::monitor::block_test::velocity_increment::VelocityIncrement::new(
-                b.velocity_increment.map_or(0.0, |c| c.alpha()),
-                b.imu_period,
-                b.gravity,
+            vel_inc: crate::monitor::block_test::velocity_increment::VelocityIncrement::for_config(
+                b,
             ),
             cfg,
         })

@@ -205,14 +205,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             heading: heading::HeadingEstimator::new(),
             tracker: fault_track::FaultTracker::new(),
             #[cfg(feature = "attitude-rate-test")]
-            att_rate: crate::monitor::block_test::attitude_rate::AttitudeRate::new(
-                cfg.attitude_rate.map_or(0.0, |c| c.alpha()),
-            ),
+            att_rate: crate::monitor::block_test::attitude_rate::AttitudeRate::for_config(&cfg),
             #[cfg(feature = "velocity-increment-test")]
-            vel_inc: crate::monitor::block_test::velocity_increment::VelocityIncrement::new(
-                cfg.velocity_increment.map_or(0.0, |c| c.alpha()),
-                cfg.imu_period,
-                cfg.gravity,
+            vel_inc: crate::monitor::block_test::velocity_increment::VelocityIncrement::for_config(
+                &cfg,
             ),
             history: heapless::HistoryBuf::new(),
             report: UkfReport::default(),

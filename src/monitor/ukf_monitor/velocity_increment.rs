@@ -4,7 +4,7 @@
 
 use crate::math::Real;
 use crate::model::{ImuVec, Measurement};
-use crate::monitor::block_test::{any_flag, merge_block_flags, EpochContext};
+use crate::monitor::block_test::{any_flag, merge_block_flags, EpochContext, IntervalTest};
 use crate::monitor::ukf_monitor::UkfMonitor;
 use crate::monitor::{Phase, VelocityIncrementDetail};
 

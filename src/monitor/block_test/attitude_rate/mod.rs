@@ -45,10 +45,10 @@
 use nalgebra::{UnitQuaternion, Vector3};
 
 use super::rotation::{from_euler, inverse_right_jacobian, rotation_exp, rotation_log};
-use super::{BlockTest, ChannelLimits, EpochContext};
+use super::{BlockTest, ChannelLimits, EpochContext, IntervalTest};
 use crate::math::Real;
 use crate::model::{ImuVec, Measurement};
-use crate::monitor::AttitudeRateConfig;
+use crate::monitor::{AttitudeRateConfig, UkfMonitorConfig};
 
 #[cfg(test)]
 mod tests;
@@ -112,37 +112,9 @@ impl<T: Real> AttitudeRate<T> {
         self.gyro_motion = T::zero();
     }
 
-    /// One IMU sample (raw) into the interval under way; `live`: the
-    /// sample was valid and the statistics run (else the interval is
-    /// dropped).
-    pub fn sample(&mut self, imu: &ImuVec<T>, dt: T, live: bool) {
-        if live {
-            let rate: Vector3<T> = imu.fixed_rows::<3>(3).into_owned();
-            self.integrate(&rate, dt);
-        } else {
-            self.invalidate();
-        }
-    }
-
-    /// A monitor's aiding epoch: one whose attitude the filter fused closes
-    /// the interval ([`epoch`](Self::epoch)); one it rejected is skipped
-    /// (the gyro integrates on).
-    pub fn aiding_epoch(
-        &mut self,
-        cfg: &AttitudeRateConfig<T>,
-        aiding: &Measurement<T>,
-        ctx: &EpochContext<T>,
-    ) {
-        if !ctx.live {
-            self.invalidate();
-            return;
-        }
-        if !ctx.fused || !aiding.available.iter().skip(3).all(|a| *a) {
-            return;
-        }
-        let att = aiding.z.fixed_rows::<3>(3);
-        let euler = [att.x, att.y, att.z];
-        self.epoch(cfg, euler, &ctx.limits, ctx.timeout_s, ctx.external);
+    /// The test of a monitor configured with `cfg` (idle when it is off).
+    pub fn for_config(cfg: &UkfMonitorConfig<T>) -> Self {
+        Self::new(cfg.attitude_rate.map_or(0.0, |c| c.alpha()))
     }
 
     /// One IMU sample's rotation.
@@ -197,6 +169,34 @@ impl<T: Real> AttitudeRate<T> {
             self.sum_dt = T::zero();
             self.sum_motion = T::zero();
             self.test.close_block(cfg, mean, motion, limits);
+        }
+    }
+}
+
+impl<T: Real> IntervalTest<T> for AttitudeRate<T> {
+    type Config = AttitudeRateConfig<T>;
+
+    fn invalidate(&mut self) {
+        AttitudeRate::invalidate(self);
+    }
+
+    fn integrate_sample(&mut self, imu: &ImuVec<T>, dt: T) {
+        self.integrate(&imu.fixed_rows::<3>(3).into_owned(), dt);
+    }
+
+    /// An attitude the filter fused closes the interval
+    /// ([`epoch`](AttitudeRate::epoch)); one it rejected is skipped (the
+    /// gyro integrates on).
+    fn close(&mut self, cfg: &Self::Config, aiding: &Measurement<T>, ctx: &EpochContext<T>) {
+        if ctx.fused && aiding.available.iter().skip(3).all(|a| *a) {
+            let att = aiding.z.fixed_rows::<3>(3);
+            self.epoch(
+                cfg,
+                [att.x, att.y, att.z],
+                &ctx.limits,
+                ctx.timeout_s,
+                ctx.external,
+            );
         }
     }
 }

@@ -53,10 +53,10 @@
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 use super::rotation::{from_euler, rotation_exp};
-use super::{BlockTest, ChannelLimits, EpochContext};
+use super::{BlockTest, ChannelLimits, EpochContext, IntervalTest};
 use crate::math::{try_inverse, Real};
 use crate::model::{ImuVec, Measurement};
-use crate::monitor::VelocityIncrementConfig;
+use crate::monitor::{UkfMonitorConfig, VelocityIncrementConfig};
 
 #[cfg(test)]
 mod tests;
@@ -253,41 +253,10 @@ impl<T: Real> VelocityIncrement<T> {
         }
     }
 
-    /// One IMU sample (raw); `live`: the sample was valid and the
-    /// statistics run (else the ring is dropped).
-    pub fn sample(&mut self, imu: &ImuVec<T>, dt: T, live: bool) {
-        if live {
-            let f: Vector3<T> = imu.fixed_rows::<3>(0).into_owned();
-            let w: Vector3<T> = imu.fixed_rows::<3>(3).into_owned();
-            self.integrate(&f, &w, dt);
-        } else {
-            self.invalidate();
-        }
-    }
-
-    /// A monitor's aiding epoch (`aiding` as the filter fuses it): an
-    /// attitude sets the rotation; a velocity the filter fused closes the
-    /// interval ([`velocity_epoch`](Self::velocity_epoch)); one it rejected
-    /// is skipped (the IMU integrates on).
-    pub fn aiding_epoch(
-        &mut self,
-        cfg: &VelocityIncrementConfig<T>,
-        aiding: &Measurement<T>,
-        ctx: &EpochContext<T>,
-    ) {
-        if !ctx.live {
-            self.invalidate();
-            return;
-        }
-        if aiding.available.iter().skip(3).all(|a| *a) {
-            let att = aiding.z.fixed_rows::<3>(3);
-            self.attitude_epoch([att.x, att.y, att.z]);
-        }
-        if !ctx.fused || !aiding.available.iter().take(3).all(|a| *a) {
-            return;
-        }
-        let v: Vector3<T> = aiding.z.fixed_rows::<3>(0).into_owned();
-        self.velocity_epoch(cfg, v, &ctx.limits, ctx.timeout_s, ctx.external);
+    /// The test of a monitor configured with `cfg` (idle when it is off).
+    pub fn for_config(cfg: &UkfMonitorConfig<T>) -> Self {
+        let alpha = cfg.velocity_increment.map_or(0.0, |c| c.alpha());
+        Self::new(alpha, cfg.imu_period, cfg.gravity)
     }
 
     /// A GNSS velocity epoch (NED, m/s) the UKF fused, closing the
@@ -393,6 +362,35 @@ impl<T: Real> VelocityIncrement<T> {
         if best != self.lag && new < cur * T::lit(LAG_SWITCH) {
             self.lag = best;
             self.test.clear_windows();
+        }
+    }
+}
+
+impl<T: Real> IntervalTest<T> for VelocityIncrement<T> {
+    type Config = VelocityIncrementConfig<T>;
+
+    fn invalidate(&mut self) {
+        VelocityIncrement::invalidate(self);
+    }
+
+    fn integrate_sample(&mut self, imu: &ImuVec<T>, dt: T) {
+        let f: Vector3<T> = imu.fixed_rows::<3>(0).into_owned();
+        self.integrate(&f, &imu.fixed_rows::<3>(3).into_owned(), dt);
+    }
+
+    /// An attitude (as the filter fuses it) sets the rotation; a velocity
+    /// the filter fused closes the interval
+    /// ([`velocity_epoch`](VelocityIncrement::velocity_epoch)); one it
+    /// rejected is skipped (the IMU integrates on).
+    fn close(&mut self, cfg: &Self::Config, aiding: &Measurement<T>, ctx: &EpochContext<T>) {
+        let av = &aiding.available;
+        if av.iter().skip(3).all(|a| *a) {
+            let att = aiding.z.fixed_rows::<3>(3);
+            self.attitude_epoch([att.x, att.y, att.z]);
+        }
+        if ctx.fused && av.iter().take(3).all(|a| *a) {
+            let v: Vector3<T> = aiding.z.fixed_rows::<3>(0).into_owned();
+            self.velocity_epoch(cfg, v, &ctx.limits, ctx.timeout_s, ctx.external);
         }
     }
 }
