@@ -79,8 +79,9 @@ impl<T: Real> OtsukfMonitor<T> {
         }
     }
 
-    /// After an applied update: `aiding` as it arrived (outliers re-aligned
-    /// on), `fused` the channels the filter fused.
+    /// After an applied update: `aiding` as it arrived (not brought
+    /// forward), `fused` the channels the filter fused (none of those the
+    /// outlier re-alignment withheld).
     pub(super) fn blocks_epoch(&mut self, aiding: &Measurement<T>, fused: &[bool; NZ]) {
         // Nothing is learnt from a block during which the fault estimate
         // flags a channel the test's residual contains: the gyro test's
