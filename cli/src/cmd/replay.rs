@@ -102,13 +102,13 @@ pub(crate) struct Args {
     /// (flight profile with GNSS aiding; 0 otherwise).
     #[arg(long, value_parser = parse_delay, default_value = "auto")]
     velocity_lag: imu_fdi_cli::eval::replay::AidingDelay,
-    /// Flight profile, UKF monitor: the gyro/attitude-aiding consistency
+    /// Flight profile, either monitor: the gyro/attitude-aiding consistency
     /// test (the gyro integrated between attitude epochs against the
     /// aiding's rotation over 2.5–10 s windows, their spread learnt on the
     /// flight); `off` leaves the gyros to the innovation windows alone.
     #[arg(long, value_enum, default_value_t = OnOff::On)]
     attitude_rate: OnOff,
-    /// Flight profile, UKF monitor: the accelerometer/GNSS-velocity
+    /// Flight profile, either monitor: the accelerometer/GNSS-velocity
     /// consistency test (the specific force rotated by the attitude aiding
     /// and integrated between GNSS velocity epochs, at a GNSS lag learnt on
     /// the flight, against the velocity change over 3–10 s windows); `off`

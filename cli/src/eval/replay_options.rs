@@ -61,10 +61,10 @@ pub struct ReplayOptions {
     /// default) fitted on each IMU's learning span as `velocity_delay`'s
     /// `auto` is, in the flight profile with GNSS aiding (0 otherwise).
     pub velocity_lag: AidingDelay,
-    /// Flight profile, UKF monitor: run the gyro/attitude-aiding
+    /// Flight profile, either monitor: run the gyro/attitude-aiding
     /// consistency test (`UkfMonitorConfig::attitude_rate`, default on).
     pub attitude_rate: bool,
-    /// Flight profile, UKF monitor: run the accelerometer/GNSS-velocity
+    /// Flight profile, either monitor: run the accelerometer/GNSS-velocity
     /// consistency test (`UkfMonitorConfig::velocity_increment`, default
     /// on; GNSS aiding only).
     pub velocity_increment: bool,
