@@ -155,12 +155,16 @@ fn estimators_find_no_attitude_lag_and_a_quarter_second_gps_lag() {
 /// went with the block variance's regression on motion); the
 /// accelerometer/GNSS-velocity test (on too) none at lag 0, one event
 /// per IMU with the GPS lag fitted; the UKF's own test none (it made
-/// 1/7/1 with the inflation frozen at the end of learning).
+/// 1/7/1 with the inflation frozen at the end of learning). The OTSUKF:
+/// 10/11/10 events with the GPS velocity fused on arrival
+/// (`--velocity-lag 0`), one per IMU (a_y, 145 s, on every IMU) with the
+/// lag compensated in the filter (its flight default), two per IMU on rows
+/// re-timed by the fitted lag.
 #[test]
 fn fault_free_flag_events_per_imu() {
     let ukf = ["--monitor", "ukf"];
     let auto = ["--monitor", "ukf", "--velocity-delay", "auto"];
-    let cases: [(&[&str], [u64; 3]); 8] = [
+    let cases: [(&[&str], [u64; 3]); 9] = [
         (&ukf, [0, 0, 0]),
         (&[&ukf[..], &["--attitude-rate", "off"]].concat(), [0, 0, 0]),
         (
@@ -180,10 +184,14 @@ fn fault_free_flag_events_per_imu() {
             .concat(),
             [0, 0, 0],
         ),
-        (&["--monitor", "otsukf"], [10, 11, 10]),
+        (&["--monitor", "otsukf"], [1, 1, 1]),
+        (
+            &["--monitor", "otsukf", "--velocity-lag", "0"],
+            [10, 11, 10],
+        ),
         (
             &["--monitor", "otsukf", "--velocity-delay", "auto"],
-            [1, 1, 1],
+            [2, 2, 2],
         ),
     ];
     for (args, want) in cases {
@@ -227,7 +235,8 @@ fn replay_from_the_ground_learns_flight_before_judging_it() {
 /// finds all 9 gyro steps (none without the gyro test) and, with the
 /// accelerometer/GNSS-velocity test, 6 of the 9 0.5 m/s² steps: IMU0's
 /// three, IMU1's x, IMU2's x and y (none without it); the OTSUKF with the lag fitted
-/// three gyro steps.
+/// the flight default (the GPS lag compensated in the filter, both block
+/// tests) 12, with the rows re-timed by the fitted lag 16.
 #[test]
 fn steps_detected_within_10_s() {
     let x = true;
@@ -244,10 +253,17 @@ fn steps_detected_within_10_s() {
         steps(&["--monitor", "ukf", "--velocity-increment", "off"]),
         [[o, o, o, x, x, x]; 3]
     );
-    // The OTSUKF with the lag fitted (1 event per IMU): 3/18.
+    // The OTSUKF, flight default (its own lag compensation, both block
+    // tests; 1 event per IMU): 12/18.
+    assert_eq!(
+        steps(&["--monitor", "otsukf"]),
+        [[x, o, x, x, x, x], [o, o, o, x, x, x], [x, o, o, x, x, x]]
+    );
+    // The OTSUKF on rows re-timed by the fitted lag (2 events per IMU):
+    // 16/18.
     assert_eq!(
         steps(&["--monitor", "otsukf", "--velocity-delay", "auto"]),
-        [[o; 6], [o, o, o, x, x, o], [o, o, o, x, o, o]]
+        [[x; 6], [x, x, o, x, x, x], [x, x, o, x, x, x]]
     );
 }
 
@@ -255,7 +271,8 @@ fn steps_detected_within_10_s() {
 /// a_x step on IMU0 (150–170 s), IMU0's `ratio_ax` stays below 1 while
 /// monitoring before the step and exceeds 1 within 10 s of it, where the
 /// flag follows; every IMU's gyro ratios are written while monitoring;
-/// the OTSUKF, which has no block test, leaves them blank.
+/// the same for the OTSUKF, which runs the same two tests; with both off
+/// it leaves them blank.
 #[test]
 fn per_row_block_test_ratios() {
     let toml = tmp("ratio-step.toml");
@@ -266,11 +283,13 @@ fn per_row_block_test_ratios() {
          [[faults]]\nchannel = 0\nstart = 150.0\nend = 170.0\nkind = \"E1\"\nsign = 1.0\n",
     )
     .unwrap();
-    let rows = |monitor: &str| -> Vec<std::collections::HashMap<String, String>> {
-        let out = tmp(&format!("ratio-{monitor}.csv"));
+    let rows = |extra: &[&str]| -> Vec<std::collections::HashMap<String, String>> {
+        let out = tmp(&format!("ratio-{}.csv", extra.join("")));
         let toml = toml.to_str().unwrap();
         let o = out.to_str().unwrap();
-        replay(&["--monitor", monitor, "--faults", toml, "--out", o]);
+        let mut args = vec!["--faults", toml, "--out", o];
+        args.extend_from_slice(extra);
+        replay(&args);
         let text = std::fs::read_to_string(&out).unwrap();
         let mut lines = text.lines();
         let head: Vec<String> = lines
@@ -291,29 +310,39 @@ fn per_row_block_test_ratios() {
     let num = |r: &std::collections::HashMap<String, String>, k: &str| -> Option<f64> {
         r[k].parse().ok()
     };
-    let ukf = rows("ukf");
-    let monitoring: Vec<_> = ukf.iter().filter(|r| r["phase"] == "monitoring").collect();
-    let t = |r: &&std::collections::HashMap<String, String>| num(r, "t").unwrap();
-    let before = monitoring
-        .iter()
-        .filter(|r| t(r) < 150.0)
-        .filter_map(|r| num(r, "ratio_ax"))
-        .fold(0.0f64, f64::max);
-    let after = monitoring
-        .iter()
-        .filter(|r| (150.0..160.0).contains(&t(r)))
-        .filter_map(|r| num(r, "ratio_ax"))
-        .fold(0.0f64, f64::max);
-    assert!(before < 1.0, "fault-free ratio up to {before}");
-    assert!(after > 1.0, "the step's ratio only {after}");
-    for k in ["ratio_gz", "imu1_ratio_gx", "imu2_ratio_gy"] {
-        assert!(
-            monitoring.iter().all(|r| num(r, k).is_some()),
-            "{k} blank while monitoring"
-        );
+    // Both monitors run the same two tests in the flight profile.
+    for monitor in ["ukf", "otsukf"] {
+        let all = rows(&["--monitor", monitor]);
+        let monitoring: Vec<_> = all.iter().filter(|r| r["phase"] == "monitoring").collect();
+        let t = |r: &&std::collections::HashMap<String, String>| num(r, "t").unwrap();
+        let before = monitoring
+            .iter()
+            .filter(|r| t(r) < 150.0)
+            .filter_map(|r| num(r, "ratio_ax"))
+            .fold(0.0f64, f64::max);
+        let after = monitoring
+            .iter()
+            .filter(|r| (150.0..160.0).contains(&t(r)))
+            .filter_map(|r| num(r, "ratio_ax"))
+            .fold(0.0f64, f64::max);
+        assert!(before < 1.0, "{monitor}: fault-free ratio up to {before}");
+        assert!(after > 1.0, "{monitor}: the step's ratio only {after}");
+        for k in ["ratio_gz", "imu1_ratio_gx", "imu2_ratio_gy"] {
+            assert!(
+                monitoring.iter().all(|r| num(r, k).is_some()),
+                "{monitor}: {k} blank while monitoring"
+            );
+        }
     }
-    let otsukf = rows("otsukf");
-    assert!(otsukf
+    let off = rows(&[
+        "--monitor",
+        "otsukf",
+        "--attitude-rate",
+        "off",
+        "--velocity-increment",
+        "off",
+    ]);
+    assert!(off
         .iter()
         .all(|r| r["ratio_ax"].is_empty() && r["imu2_ratio_gz"].is_empty()));
 }

@@ -45,6 +45,10 @@ pub struct OtsukfUpdate<T, const N: usize, const M: usize, const L: usize> {
     pub fault_innovation: SVector<T, M>,
     /// The fault filter's gain `K^f`.
     pub fault_gain: SMatrix<T, L, M>,
+    /// `diag(A)`, `A = P_yy + S P^f Sᵀ`: the variance the filter predicts
+    /// for each component of `r^f` (what a learned inflation compares the
+    /// observed `r^f` with).
+    pub fault_innovation_variance: SVector<T, M>,
 }
 
 fn wrap_angles<T: Real, const K: usize>(v: &mut SVector<T, K>, angles: &[bool; K]) {
@@ -345,6 +349,7 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> Otsukf<T, N, S, L>
             bias_free: out,
             fault_innovation: rf,
             fault_gain: kf,
+            fault_innovation_variance: a.diagonal(),
         })
     }
 }

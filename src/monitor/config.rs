@@ -71,7 +71,9 @@ pub struct UkfMonitorConfig<T> {
     /// Consecutive detections needed to raise or clear a channel flag (AUV
     /// preset 2, aircraft 1; see [`aircraft`](Self::aircraft)).
     pub persistence: u16,
-    /// Upper bound of the learned innovation inflation (1 disables it).
+    /// Upper bound of the learned innovation inflation (1 disables it; the
+    /// OTSUKF monitor bounds its learned `R` inflation by it too,
+    /// `OtsukfConfig::inflation_block`).
     /// During learning the monitor measures, per innovation channel, how
     /// much larger the window t statistic's spread is on this vehicle's
     /// healthy data than the white-noise t distribution says: time
@@ -155,22 +157,24 @@ pub struct UkfMonitorConfig<T> {
     /// OTSUKF's value, on in `replay`'s flight profile.
     pub fault_psd: Option<ImuVec<T>>,
     /// The gyro/attitude-aiding consistency test (issue 15,
-    /// `ukf_monitor/attitude_rate/`): the gyro integrated between
+    /// `monitor/block_test/attitude_rate/`): the gyro integrated between
     /// attitude epochs against the aiding's rotation, summed over windows
     /// of seconds and tested against the spread this flight has shown at
     /// those lengths, for gyro biases against an aiding whose errors
     /// wander (a real autopilot's attitude). Its flags are added to the
-    /// ten-epoch test's on the gyro channels. Off in the presets; on in
+    /// ten-epoch test's on the gyro channels (the OTSUKF monitor's: to its
+    /// fault-estimate test's). Off in the presets; on in
     /// `replay`'s flight profile ([`AttitudeRateConfig::flight`]). Needs
     /// the feature `attitude-rate-test`.
     pub attitude_rate: Option<AttitudeRateConfig<T>>,
     /// The accelerometer/GNSS-velocity consistency test (issue 15,
-    /// `ukf_monitor/velocity_increment/`): the raw specific force rotated
+    /// `monitor/block_test/velocity_increment/`): the raw specific force rotated
     /// by the attitude aiding and integrated between GNSS velocity epochs
     /// (at a GNSS lag learnt from the data) against the GNSS velocity
     /// change, as a body-axis bias over windows of seconds, tested like
     /// [`attitude_rate`](Self::attitude_rate). Its flags are added to the
-    /// ten-epoch test's on the accelerometer channels. Off in the presets;
+    /// ten-epoch test's (the OTSUKF's fault-estimate test's) on the
+    /// accelerometer channels. Off in the presets;
     /// on in `replay`'s flight profile ([`VelocityIncrementConfig::velocity`]).
     /// Needs the feature `velocity-increment-test` and GNSS velocity plus
     /// attitude aiding (M2).

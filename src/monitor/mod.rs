@@ -3,6 +3,8 @@
 
 mod align;
 mod attitude_rate_config;
+#[cfg(any(feature = "attitude-rate-test", feature = "velocity-increment-test"))]
+mod block_test;
 mod config;
 mod config_error;
 mod input;

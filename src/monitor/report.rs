@@ -160,6 +160,10 @@ pub struct OtsukfDetail<T> {
     /// Everything the filter attributes to the IMU: `f̂` (nominal bias plus
     /// fault).
     pub total_bias: ImuVec<T>,
+    /// The learned inflation of each aiding component's measurement noise
+    /// `R` (1 until monitoring starts, and with
+    /// `UkfMonitorConfig::max_innovation_inflation` = 1).
+    pub innovation_inflation: [T; NZ],
 }
 
 impl<T: Real> Default for UkfDetail<T> {
@@ -182,6 +186,7 @@ impl<T: Real> Default for OtsukfDetail<T> {
         Self {
             fault_sigma: ImuVec::zeros(),
             total_bias: ImuVec::zeros(),
+            innovation_inflation: [T::one(); NZ],
         }
     }
 }

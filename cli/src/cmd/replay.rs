@@ -101,13 +101,20 @@ pub(crate) struct Args {
     /// sample is then fused at the row it describes. Either monitor.
     #[arg(long, value_parser = parse_delay, default_value = "0")]
     velocity_delay: imu_fdi_cli::eval::replay::AidingDelay,
-    /// Flight profile, UKF monitor: the gyro/attitude-aiding consistency
+    /// OTSUKF: latency of the GNSS velocity that the monitor compensates
+    /// itself, causally (each velocity brought to the present by the
+    /// IMU-propagated change over the lag), seconds, or `auto` (default) to
+    /// fit it as `--velocity-delay auto` does, on each IMU's learning span
+    /// (flight profile with GNSS aiding; 0 otherwise).
+    #[arg(long, value_parser = parse_delay, default_value = "auto")]
+    velocity_lag: imu_fdi_cli::eval::replay::AidingDelay,
+    /// Flight profile, either monitor: the gyro/attitude-aiding consistency
     /// test (the gyro integrated between attitude epochs against the
     /// aiding's rotation over 2.5–10 s windows, their spread learnt on the
     /// flight); `off` leaves the gyros to the innovation windows alone.
     #[arg(long, value_enum, default_value_t = OnOff::On)]
     attitude_rate: OnOff,
-    /// Flight profile, UKF monitor: the accelerometer/GNSS-velocity
+    /// Flight profile, either monitor: the accelerometer/GNSS-velocity
     /// consistency test (the specific force rotated by the attitude aiding
     /// and integrated between GNSS velocity epochs, at a GNSS lag learnt on
     /// the flight, against the velocity change over 3–10 s windows); `off`
@@ -172,6 +179,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         aiding_delay,
         heading_offset,
         velocity_delay,
+        velocity_lag,
         attitude_rate,
         velocity_increment,
         detect,
@@ -219,6 +227,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         aiding_delay,
         estimate_heading_offset: heading_offset == HeadingArg::Auto,
         velocity_delay,
+        velocity_lag,
         attitude_rate: attitude_rate == OnOff::On,
         velocity_increment: velocity_increment == OnOff::On,
     };
@@ -352,6 +361,16 @@ pub(crate) fn run(args: Args) -> Result<()> {
             .collect::<Vec<_>>()
             .join(", ")
     );
+    if !s.otsukf_velocity_lag_s.is_empty() {
+        note!(
+            "  OTSUKF velocity lag compensated: {} s",
+            s.otsukf_velocity_lag_s
+                .iter()
+                .map(|x| format!("{x:.3}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     if let Some(p) = out {
         note!("wrote {}", p.display());
     }

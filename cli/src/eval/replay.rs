@@ -255,44 +255,63 @@ pub fn replay_observed(
     let mut monitors = Vec::new();
     // Per IMU, the velocity aiding's lag in rows (see `velocity_delay`).
     let mut vel_lag = Vec::new();
+    // The GNSS velocity's lag fitted on IMU `k`'s learning span.
+    let fit_lag = |k: usize| -> Result<Option<super::gnss_lag::GnssLag>> {
+        // The fit compares NED velocity changes with the specific force
+        // rotated by the attitude: a DVL's body-frame velocity is another
+        // model.
+        if kind != AidingKind::GnssAttitude {
+            bail!(
+                "{}: --velocity-delay/--velocity-lag auto needs GNSS velocity (NED) and \
+                 attitude aiding; give a DVL's latency in seconds",
+                input.display()
+            );
+        }
+        let probe = sim_cfg(kind);
+        let t0 = rows.first().map_or(0.0, |r| r.t);
+        let span = probe.converge_s + opts.learn_s.unwrap_or(probe.learn_s.max(20.0));
+        let head: Vec<&Row> = rows.iter().take_while(|r| r.t < t0 + span).collect();
+        let avail3 = |r: &Row, o: usize| {
+            let ok = r.avail.iter().skip(o).take(3).all(|a| *a);
+            ok.then(|| core::array::from_fn(|i| r.z.get(o + i).copied().unwrap_or(0.0)))
+        };
+        Ok(super::gnss_lag::estimate(
+            &head.iter().map(|r| r.t).collect::<Vec<_>>(),
+            &head
+                .iter()
+                .map(|r| r.imus.get(k).copied().unwrap_or([f64::NAN; 6]))
+                .collect::<Vec<_>>(),
+            &head.iter().map(|r| avail3(r, 0)).collect::<Vec<_>>(),
+            &head.iter().map(|r| avail3(r, 3)).collect::<Vec<_>>(),
+            (0.5 / dt).round() as usize,
+        ))
+    };
     for k in 0..imu_idx.len() {
         let lag = match opts.velocity_delay {
             AidingDelay::Fixed(d) => (d / dt).round().max(0.0) as usize,
             AidingDelay::Auto => {
-                // The fit compares NED velocity changes with the specific
-                // force rotated by the attitude: a DVL's body-frame
-                // velocity is another model.
-                if kind != AidingKind::GnssAttitude {
-                    bail!(
-                        "{}: --velocity-delay auto needs GNSS velocity (NED) and attitude aiding; \
-                         give a DVL's latency in seconds",
-                        input.display()
-                    );
-                }
-                let probe = sim_cfg(kind);
-                let t0 = rows.first().map_or(0.0, |r| r.t);
-                let span = probe.converge_s + opts.learn_s.unwrap_or(probe.learn_s.max(20.0));
-                let head: Vec<&Row> = rows.iter().take_while(|r| r.t < t0 + span).collect();
-                let avail3 = |r: &Row, o: usize| {
-                    let ok = r.avail.iter().skip(o).take(3).all(|a| *a);
-                    ok.then(|| core::array::from_fn(|i| r.z.get(o + i).copied().unwrap_or(0.0)))
-                };
-                let fit = super::gnss_lag::estimate(
-                    &head.iter().map(|r| r.t).collect::<Vec<_>>(),
-                    &head
-                        .iter()
-                        .map(|r| r.imus.get(k).copied().unwrap_or([f64::NAN; 6]))
-                        .collect::<Vec<_>>(),
-                    &head.iter().map(|r| avail3(r, 0)).collect::<Vec<_>>(),
-                    &head.iter().map(|r| avail3(r, 3)).collect::<Vec<_>>(),
-                    (0.5 / dt).round() as usize,
-                );
+                let fit = fit_lag(k)?;
                 if let Some(l) = fit {
                     sum.velocity_fit_rms_m_s.push(l.rms_m_s);
                 }
                 fit.map_or(0, |l| l.rows)
             }
         };
+        // The OTSUKF's own (causal) compensation: by default in the flight
+        // profile with GNSS aiding, unless the rows are re-timed above.
+        let otsukf_lag_s = match (opts.monitor, opts.velocity_lag) {
+            (MonitorKind::Otsukf, AidingDelay::Fixed(d)) => Some(d),
+            (MonitorKind::Otsukf, AidingDelay::Auto)
+                if lag == 0 && profile == Profile::Flight && kind == AidingKind::GnssAttitude =>
+            {
+                Some(fit_lag(k)?.map_or(0.0, |l| l.rows as f64 * dt))
+            }
+            (MonitorKind::Otsukf, AidingDelay::Auto) => Some(0.0),
+            (MonitorKind::Ukf, _) => None,
+        };
+        if let Some(l) = otsukf_lag_s {
+            sum.otsukf_velocity_lag_s.push(l);
+        }
         sum.velocity_delay_s.push(lag as f64 * dt);
         vel_lag.push(lag);
         let mut cfg = match profile {
@@ -347,7 +366,11 @@ pub fn replay_observed(
             sum.meas_sigma_velocity_m_s = sum.meas_sigma.iter().take(3).copied().collect();
             sum.meas_sigma_attitude_rad = sum.meas_sigma.iter().skip(3).copied().collect();
         }
-        monitors.push(ReplayMonitor::new(opts.monitor, cfg)?);
+        monitors.push(ReplayMonitor::new(
+            opts.monitor,
+            cfg,
+            otsukf_lag_s.unwrap_or(0.0),
+        )?);
     }
     let has_truth: Vec<bool> = (0..imu_idx.len())
         .map(|k| {

@@ -59,13 +59,23 @@ pub enum ReplayMonitor {
 
 impl ReplayMonitor {
     /// A monitor of `kind` on `base`: the UKF monitor's configuration, or
-    /// the OTSUKF's default around it ([`OtsukfConfig::from_base`]).
-    pub fn new(kind: MonitorKind, base: UkfMonitorConfig<f64>) -> Result<Self> {
+    /// the OTSUKF's default around it ([`OtsukfConfig::from_base`]) with
+    /// `velocity_lag_s` its compensated velocity-aiding latency.
+    pub fn new(
+        kind: MonitorKind,
+        base: UkfMonitorConfig<f64>,
+        velocity_lag_s: f64,
+    ) -> Result<Self> {
         let invalid = |e| anyhow!("invalid monitor configuration: {e:?}");
         Ok(match kind {
             MonitorKind::Ukf => Self::Ukf(Box::new(UkfMonitor::new(base).map_err(invalid)?)),
             MonitorKind::Otsukf => Self::Otsukf(Box::new(
-                OtsukfMonitor::new(OtsukfConfig::from_base(base)).map_err(invalid)?,
+                OtsukfMonitor::new({
+                    let mut c = OtsukfConfig::from_base(base);
+                    c.velocity_lag_s = velocity_lag_s;
+                    c
+                })
+                .map_err(invalid)?,
             )),
         })
     }
@@ -101,15 +111,28 @@ impl ReplayMonitor {
                     })),
                 })
             }
-            Self::Otsukf(m) => m.step(imu, dt, aiding).map_detail(|d| ReplayDetail {
-                fault_sigma: Some(d.fault_sigma),
-                innovation_inflation: None,
-                innovations: None,
-                aiding_delay_s: None,
-                heading_offset_rad: None,
-                velocity_increment: None,
-                block_ratio: [None; 6],
-            }),
+            Self::Otsukf(m) => {
+                let r = m.step(imu, dt, aiding);
+                let vi = m.velocity_increment_detail();
+                let ar = m.attitude_rate_detail();
+                let block_ratio = core::array::from_fn(|i| {
+                    let (d, j) = if i < 3 {
+                        (vi.map(|v| v.0), i)
+                    } else {
+                        (ar, i - 3)
+                    };
+                    d.and_then(|d| d.ratio.get(j).copied())
+                });
+                r.map_detail(|d| ReplayDetail {
+                    fault_sigma: Some(d.fault_sigma),
+                    innovation_inflation: Some(d.innovation_inflation),
+                    innovations: None,
+                    aiding_delay_s: None,
+                    heading_offset_rad: None,
+                    velocity_increment: vi.map(|(d, lag)| (lag, d.offset)),
+                    block_ratio,
+                })
+            }
         }
     }
 }

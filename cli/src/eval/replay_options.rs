@@ -59,10 +59,15 @@ pub struct ReplayOptions {
     /// describes (the log is at hand: the offline equivalent of delayed
     /// fusion at a known lag).
     pub velocity_delay: AidingDelay,
-    /// Flight profile, UKF monitor: run the gyro/attitude-aiding
+    /// OTSUKF: the velocity aiding's latency the monitor compensates itself,
+    /// causally (`OtsukfConfig::velocity_lag_s`), fixed or (`Auto`, the
+    /// default) fitted on each IMU's learning span as `velocity_delay`'s
+    /// `auto` is, in the flight profile with GNSS aiding (0 otherwise).
+    pub velocity_lag: AidingDelay,
+    /// Flight profile, either monitor: run the gyro/attitude-aiding
     /// consistency test (`UkfMonitorConfig::attitude_rate`, default on).
     pub attitude_rate: bool,
-    /// Flight profile, UKF monitor: run the accelerometer/GNSS-velocity
+    /// Flight profile, either monitor: run the accelerometer/GNSS-velocity
     /// consistency test (`UkfMonitorConfig::velocity_increment`, default
     /// on; GNSS aiding only).
     pub velocity_increment: bool,
@@ -104,6 +109,7 @@ impl Default for ReplayOptions {
             aiding_delay: AidingDelay::default(),
             estimate_heading_offset: false,
             velocity_delay: AidingDelay::default(),
+            velocity_lag: AidingDelay::Auto,
             attitude_rate: true,
             velocity_increment: true,
         }

@@ -122,6 +122,9 @@ pub struct ReplaySummary {
     /// (two aiding errors and the IMU's integration error over one
     /// interval).
     pub velocity_fit_rms_m_s: Vec<f64>,
+    /// Per IMU, the OTSUKF's own compensated velocity latency
+    /// (`--velocity-lag`), s (empty for the UKF monitor).
+    pub otsukf_velocity_lag_s: Vec<f64>,
     /// Per IMU (UKF monitor, `--velocity-increment on`): the GNSS lag the
     /// accelerometer/GNSS-velocity test used on the last row, s.
     pub velocity_increment_lag_s: Vec<f64>,

@@ -7,8 +7,10 @@ use crate::monitor::{ConfigError, UkfMonitorConfig};
 /// Configuration of [`OtsukfMonitor`](super::OtsukfMonitor).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OtsukfConfig<T> {
-    /// Vehicle, sensors, aiding, start-up timing and minimum faults (the
-    /// detector fields of the innovation monitor are not used).
+    /// Vehicle, sensors, aiding, start-up timing and minimum faults, the
+    /// bound of the learned `R` inflation (`max_innovation_inflation`) and
+    /// the two block tests (`attitude_rate`, `velocity_increment`); the
+    /// innovation monitor's other detector fields are not used.
     pub base: UkfMonitorConfig<T>,
     /// Random-walk power spectral density of the fault model per channel,
     /// ((m/s²)²/s, (rad/s)²/s): `Q^f = psd · dt` per step. It sets how fast a
@@ -41,6 +43,18 @@ pub struct OtsukfConfig<T> {
     /// the extra fault-estimate noise costs more than the lag it saves
     /// (measured on S2/S3, see the README), hence `None` by default.
     pub adapt_level: Option<T>,
+    /// Epochs per block of the learned measurement-noise inflation (bounded
+    /// by `base.max_innovation_inflation`; 1 there disables it): during
+    /// learning each aiding component's `R` is scaled by what the spread of
+    /// its innovation, averaged over blocks of this many consecutive
+    /// epochs, proves beyond the filter's prediction, so time correlation
+    /// over a block counts too (`inflation.rs`).
+    pub inflation_block: u16,
+    /// Latency of the velocity aiding, s: each velocity sample describes the
+    /// vehicle this long before it arrives, and is brought to now by the
+    /// IMU-propagated velocity change over the lag before it is fused
+    /// (`velocity_lag.rs`). 0: fused on arrival. At most 64 IMU periods.
+    pub velocity_lag_s: T,
 }
 
 impl<T: Real> OtsukfConfig<T> {
@@ -81,6 +95,18 @@ impl<T: Real> OtsukfConfig<T> {
             ),
             adapt_hold_s: T::lit(0.3),
             adapt_level: None,
+            inflation_block: 10,
+            velocity_lag_s: T::zero(),
+        }
+    }
+
+    /// The velocity aiding's latency in whole IMU periods.
+    pub(super) fn lag_steps(&self) -> usize {
+        let n = (self.velocity_lag_s / self.base.imu_period).to_f64();
+        if n.is_finite() && n > 0.0 {
+            (n + 0.5) as usize
+        } else {
+            0
         }
     }
 
@@ -100,7 +126,7 @@ impl<T: Real> OtsukfConfig<T> {
         if let Some(&(field, _)) = positive.iter().find(|(_, ok)| !ok) {
             return Err(ConfigError::NonPositive(field));
         }
-        let in_range: [(&'static str, bool); 3] = [
+        let in_range: [(&'static str, bool); 4] = [
             // Hysteresis: the clear threshold may not exceed the set one.
             ("k_off", self.k_off <= self.k_on),
             (
@@ -110,6 +136,12 @@ impl<T: Real> OtsukfConfig<T> {
             (
                 "adapt_hold_s",
                 self.adapt_hold_s.finite() && self.adapt_hold_s >= T::zero(),
+            ),
+            (
+                "velocity_lag_s",
+                self.velocity_lag_s.finite()
+                    && self.velocity_lag_s >= T::zero()
+                    && self.lag_steps() <= super::LAG_RING,
             ),
         ];
         if let Some(&(field, _)) = in_range.iter().find(|(_, ok)| !ok) {

@@ -18,10 +18,23 @@ use crate::model::{
     StateVec, VehicleModel, NZ, STATE_ANGLES,
 };
 
+#[cfg(any(feature = "attitude-rate-test", feature = "velocity-increment-test"))]
+mod block_tests;
+#[cfg(not(any(feature = "attitude-rate-test", feature = "velocity-increment-test")))]
+mod block_tests_off;
 mod config;
+mod inflation;
 mod recover;
+mod velocity_lag;
+
+use inflation::Inflation;
+use velocity_lag::{VelocityLag, LAG_RING};
 
 pub use config::OtsukfConfig;
+
+/// Largest nominal bias learnt, in `min_fault`s (as the innovation
+/// monitor's): anything larger is a fault present from power-on.
+const NOMINAL_CAP: f64 = 20.0;
 
 /// Statistics pause after an unusable or saturated sample, s.
 const INPUT_HOLDOFF_S: f64 = 0.5;
@@ -58,6 +71,19 @@ pub struct OtsukfMonitor<T> {
     /// Time left during which nothing is learned and no new fault is
     /// declared: after an unusable or saturated sample, a re-alignment.
     holdoff: T,
+    /// Learned measurement-noise inflation per aiding component.
+    inflation: Inflation<T>,
+    /// The predicted velocity's recent changes (velocity aiding latency).
+    vel_lag: VelocityLag<T>,
+    /// The velocity aiding's latency in IMU periods (0: fused on arrival).
+    lag_steps: usize,
+    /// The gyro/attitude-aiding block test (`base.attitude_rate`).
+    #[cfg(feature = "attitude-rate-test")]
+    att_rate: crate::monitor::block_test::attitude_rate::AttitudeRate<T>,
+    /// The accelerometer/GNSS-velocity block test
+    /// (`base.velocity_increment`).
+    #[cfg(feature = "velocity-increment-test")]
+    vel_inc: crate::monitor::block_test::velocity_increment::VelocityIncrement<T>,
 }
 
 impl<T: Real> OtsukfMonitor<T> {
@@ -98,6 +124,15 @@ impl<T: Real> OtsukfMonitor<T> {
             track: AidingTrack::new(),
             frozen: FrozenCheck::new(),
             holdoff: T::zero(),
+            inflation: Inflation::new(),
+            vel_lag: VelocityLag::new(),
+            lag_steps: cfg.lag_steps(),
+            #[cfg(feature = "attitude-rate-test")]
+            att_rate: crate::monitor::block_test::attitude_rate::AttitudeRate::for_config(b),
+            #[cfg(feature = "velocity-increment-test")]
+            vel_inc: crate::monitor::block_test::velocity_increment::VelocityIncrement::for_config(
+                b,
+            ),
             cfg,
         })
     }
@@ -147,13 +182,26 @@ impl<T: Real> OtsukfMonitor<T> {
             self.try_align(aiding, &omega);
             return self.compose(&u_meas, health, false);
         }
+        let v_before = self.predicted_velocity(&omega);
+        let mut propagated = false;
         if dt_ok {
+            self.blocks_sample(imu, dt, usable);
             match self.predict(&u_corr, dt) {
-                Ok(reset) => health.covariance_reset |= reset,
+                Ok(reset) => {
+                    health.covariance_reset |= reset;
+                    propagated = true;
+                }
                 Err(ModelError::PitchSingularity) => health.pitch_singular = true,
                 Err(ModelError::NonFinite) => health.input_invalid = true,
             }
             self.phase_time += dt;
+        }
+        if self.lag_steps > 0 {
+            let dv = match (propagated, v_before, self.predicted_velocity(&omega)) {
+                (true, Some(a), Some(b)) => b - a + self.fault_velocity_rate() * dt,
+                _ => Vector3::zeros(),
+            };
+            self.vel_lag.push(dv);
         }
         // Through ±90°: the attitude is re-aligned from the aiding.
         if health.pitch_singular && aiding.any() && self.recover_singular(aiding, &omega) {
@@ -161,32 +209,57 @@ impl<T: Real> OtsukfMonitor<T> {
         }
         let mut updated = false;
         if aiding.any() && !health.pitch_singular {
-            let (aiding, realigned) = self.realign_outliers(aiding, &omega);
+            // The velocity brought to now before anything compares it with
+            // the state: re-aligned to its late value in every turn, the
+            // state would be pulled back by the lag it compensates.
+            let present = self.bring_velocity_forward(aiding);
+            let (present, realigned) = self.realign_outliers(&present, &omega);
             if realigned {
                 health.mark_realigned(true);
+                self.blocks_clear();
             }
-            if aiding.any() {
-                updated = self.update(&aiding, &omega, &mut health);
+            if present.any() {
+                if let Some(fused) = self.update(&present, &omega, &mut health) {
+                    updated = true;
+                    // The block tests take the aiding as it arrived (the
+                    // velocity test learns its own lag); `fused` says
+                    // which channels count.
+                    self.blocks_epoch(aiding, &fused);
+                }
             }
         }
         let quiet = health == Health::default() && self.holdoff <= T::zero();
+        if !quiet {
+            self.inflation.break_blocks();
+        }
         self.advance_phase(quiet);
         if self.phase == Phase::Monitoring {
             self.decide(self.holdoff <= T::zero());
         }
         // An unusable sample is not passed on: the corrected sample is the
         // stand-in the filter used (never NaN).
-        self.compose(&u_meas, health, updated)
+        let mut r = self.compose(&u_meas, health, updated);
+        self.blocks_apply(&mut r);
+        r
     }
 
-    /// The two-stage update with the outlier gate; true when applied.
+    /// The two-stage update with the outlier gate; when applied, the
+    /// channels it fused.
     #[inline(never)] // own stack frame and one copy (issue 17)
-    fn update(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>, health: &mut Health) -> bool {
+    fn update(
+        &mut self,
+        aiding: &Measurement<T>,
+        omega: &Vector3<T>,
+        health: &mut Health,
+    ) -> Option<[bool; NZ]> {
         let b = self.cfg.base;
         let available = usable_aiding(aiding);
         let x_pred = self.filter.state();
         let hjac = self.meas.jacobian(&x_pred, omega);
-        let r = b.meas_sigma.component_mul(&b.meas_sigma);
+        let mut r = b.meas_sigma.component_mul(&b.meas_sigma);
+        for (v, c) in r.iter_mut().zip(self.inflation.factor().iter()) {
+            *v *= *c;
+        }
         let meas = self.meas;
         let prior_var = self.filter.fault_covariance().diagonal();
         let prior_fault = *self.filter.fault();
@@ -220,12 +293,30 @@ impl<T: Real> OtsukfMonitor<T> {
                         health.aiding_rejected |= !d.fused;
                     }
                 }
+                // Learned on quiet epochs only (no input or aiding flag, no
+                // hold-off): a glitch or an outlier cannot inflate `R`.
+                let quiet = *health == Health::default() && self.holdoff <= T::zero();
+                if self.phase == Phase::Learning && quiet && b.max_innovation_inflation > T::one() {
+                    let len = self.cfg.inflation_block;
+                    for (i, ((d, rf), a)) in out
+                        .bias_free
+                        .diag
+                        .iter()
+                        .zip(out.fault_innovation.iter())
+                        .zip(out.fault_innovation_variance.iter())
+                        .enumerate()
+                    {
+                        if d.fused {
+                            self.inflation.observe(i, *rf, *a, len);
+                        }
+                    }
+                }
                 health.covariance_reset |= out.bias_free.covariance_reset.is_some();
-                true
+                Some(out.bias_free.diag.map(|d| d.fused))
             }
             Err(_) => {
                 health.covariance_reset = true;
-                false
+                None
             }
         }
     }
@@ -240,6 +331,56 @@ impl<T: Real> OtsukfMonitor<T> {
             .reset_state(x, Mat6::from_diagonal(&s.component_mul(&s)));
         self.phase = Phase::Converging;
         self.phase_time = T::zero();
+        self.vel_lag.reset();
+    }
+
+    /// The velocity rows of `h(x̂)` (NED for GNSS, body for a DVL), when
+    /// the velocity aiding's latency is compensated.
+    fn predicted_velocity(&self, omega: &Vector3<T>) -> Option<Vector3<T>> {
+        if self.lag_steps == 0 {
+            return None;
+        }
+        let z = self.meas.predict(&self.filter.state(), omega);
+        Some(z.fixed_rows::<3>(0).into_owned())
+    }
+
+    /// The accelerometer fault estimate as a rate of the measured velocity
+    /// (rotated to NED for GNSS): added back to each period's propagated
+    /// change, so the change is that of the raw specific force. Taken with
+    /// the corrected one, the compensation would move with `f̂` itself, a
+    /// feedback the fault filter does not model: on S3 with the GNSS 0.2 s
+    /// late, compensating 0.3 s made the fault estimates diverge.
+    fn fault_velocity_rate(&self) -> Vector3<T> {
+        let mut x = self.filter.state();
+        let f = self.filter.fault();
+        for (v, fa) in x.iter_mut().zip(f.iter()).take(3) {
+            *v = *fa;
+        }
+        let z = self.meas.predict(&x, &Vector3::zeros());
+        z.fixed_rows::<3>(0).into_owned()
+    }
+
+    /// A velocity that describes the vehicle `lag_steps` periods ago,
+    /// brought to now by the IMU-propagated change since
+    /// (`velocity_lag.rs`); not fused until that change is known.
+    fn bring_velocity_forward(&self, aiding: &Measurement<T>) -> Measurement<T> {
+        let mut a = *aiding;
+        if self.lag_steps == 0 || !a.available.iter().take(3).any(|v| *v) {
+            return a;
+        }
+        match self.vel_lag.over(self.lag_steps) {
+            Some(dv) => {
+                for (z, d) in a.z.iter_mut().zip(dv.iter()) {
+                    *z += *d;
+                }
+            }
+            None => {
+                for v in a.available.iter_mut().take(3) {
+                    *v = false;
+                }
+            }
+        }
+        a
     }
 
     #[inline(never)] // own stack frame and one copy (issue 17)
@@ -305,16 +446,20 @@ impl<T: Real> OtsukfMonitor<T> {
                 self.phase = Phase::Learning;
                 self.nominal = ImuVec::zeros();
                 self.learn_count = T::zero();
+                self.inflation.reset();
+                self.blocks_reset();
             }
             Some(Phase::Monitoring) => {
-                // Capped like the innovation monitor's: anything larger
-                // is a fault present from power-on.
-                let cap = T::lit(20.0);
+                let cap = T::lit(NOMINAL_CAP);
                 self.nominal = self
                     .nominal
                     .zip_map(&b.min_fault, |f, m| f.max(-m * cap).min(m * cap));
                 self.latched = [0; 6];
                 self.phase = Phase::Monitoring;
+                // Frozen from here on: a fault cannot raise its own `R`.
+                // `max_innovation_inflation` 1 keeps the nominal `R`.
+                self.inflation.freeze(b.max_innovation_inflation);
+                self.blocks_start();
             }
             _ => {}
         }
@@ -386,6 +531,7 @@ impl<T: Real> OtsukfMonitor<T> {
             detail: OtsukfDetail {
                 fault_sigma: pf.diagonal().map(|v| v.max(T::zero()).sqrt_fast()),
                 total_bias: fault,
+                innovation_inflation: *self.inflation.factor(),
             },
         }
     }

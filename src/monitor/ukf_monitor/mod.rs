@@ -20,8 +20,6 @@ use crate::stats::normal_upper_quantile;
 mod attitude_rate;
 #[cfg(not(feature = "attitude-rate-test"))]
 mod attitude_rate_off;
-#[cfg(any(feature = "attitude-rate-test", feature = "velocity-increment-test"))]
-mod block_test;
 mod compose;
 mod delay;
 mod detection;
@@ -132,11 +130,11 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     tracker: fault_track::FaultTracker<T>,
     /// The gyro/attitude-aiding consistency test (`attitude_rate/`).
     #[cfg(feature = "attitude-rate-test")]
-    att_rate: attitude_rate::AttitudeRate<T>,
+    att_rate: crate::monitor::block_test::attitude_rate::AttitudeRate<T>,
     /// The accelerometer/GNSS-velocity consistency test
     /// (`velocity_increment/`).
     #[cfg(feature = "velocity-increment-test")]
-    vel_inc: velocity_increment::VelocityIncrement<T>,
+    vel_inc: crate::monitor::block_test::velocity_increment::VelocityIncrement<T>,
     history: heapless::HistoryBuf<StateVec<T>, { MAX_DELAY_STEPS + 1 }>,
     report: UkfReport<T>,
 }
@@ -214,14 +212,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             heading: heading::HeadingEstimator::new(),
             tracker: fault_track::FaultTracker::new(),
             #[cfg(feature = "attitude-rate-test")]
-            att_rate: attitude_rate::AttitudeRate::new(
-                cfg.attitude_rate.map_or(0.0, |c| c.alpha()),
-            ),
+            att_rate: crate::monitor::block_test::attitude_rate::AttitudeRate::for_config(&cfg),
             #[cfg(feature = "velocity-increment-test")]
-            vel_inc: velocity_increment::VelocityIncrement::new(
-                cfg.velocity_increment.map_or(0.0, |c| c.alpha()),
-                cfg.imu_period,
-                cfg.gravity,
+            vel_inc: crate::monitor::block_test::velocity_increment::VelocityIncrement::for_config(
+                &cfg,
             ),
             history: heapless::HistoryBuf::new(),
             report: UkfReport::default(),
@@ -300,11 +294,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// the smallest deviation reported, `min_fault × threshold_fraction`,
     /// as the UKF's own threshold method has it.
     #[cfg(any(feature = "attitude-rate-test", feature = "velocity-increment-test"))]
-    fn block_limits(&self, first: usize) -> block_test::ChannelLimits<T> {
+    fn block_limits(&self, first: usize) -> super::block_test::ChannelLimits<T> {
         let rows = |v: ImuVec<T>| {
             Vector3::from_fn(|i, _| v.get(first + i).copied().unwrap_or_else(T::zero))
         };
-        block_test::ChannelLimits {
+        super::block_test::ChannelLimits {
             nominal: rows(self.nominal_bias_bound()),
             relevant: rows(self.cfg.min_fault * self.cfg.threshold_fraction),
         }

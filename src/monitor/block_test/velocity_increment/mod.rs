@@ -52,12 +52,12 @@
 
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
-use super::block_test::rotation::{from_euler, rotation_exp};
-use super::block_test::{BlockTest, ChannelLimits};
+use super::rotation::{from_euler, rotation_exp};
+use super::{BlockTest, ChannelLimits, EpochContext, IntervalTest};
 use crate::math::{try_inverse, Real};
-use crate::monitor::VelocityIncrementConfig;
+use crate::model::{ImuVec, Measurement};
+use crate::monitor::{UkfMonitorConfig, VelocityIncrementConfig};
 
-mod hooks;
 #[cfg(test)]
 mod tests;
 
@@ -98,7 +98,7 @@ impl<T: Real> Increment<T> {
 
 /// The test's state (see the module notes).
 #[derive(Debug, Clone)]
-pub(super) struct VelocityIncrement<T> {
+pub(in crate::monitor) struct VelocityIncrement<T> {
     /// The body→NED attitude: the latest aiding epoch carried on by the gyro.
     attitude: Option<UnitQuaternion<T>>,
     /// The last `DELAY_RING` increments, newest at `head − 1`.
@@ -130,7 +130,7 @@ pub(super) struct VelocityIncrement<T> {
     /// Gravity (NED down), m/s².
     gravity: T,
     /// Blocks, windows, learning and decisions.
-    pub(super) test: BlockTest<T>,
+    pub(in crate::monitor) test: BlockTest<T>,
 }
 
 impl<T: Real> VelocityIncrement<T> {
@@ -253,6 +253,12 @@ impl<T: Real> VelocityIncrement<T> {
         }
     }
 
+    /// The test of a monitor configured with `cfg` (idle when it is off).
+    pub fn for_config(cfg: &UkfMonitorConfig<T>) -> Self {
+        let alpha = cfg.velocity_increment.map_or(0.0, |c| c.alpha());
+        Self::new(alpha, cfg.imu_period, cfg.gravity)
+    }
+
     /// A GNSS velocity epoch (NED, m/s) the UKF fused, closing the
     /// interval; decides and learns when it closes a block. `limits`: the
     /// accelerometer channels' (largest offset, smallest deviation
@@ -356,6 +362,35 @@ impl<T: Real> VelocityIncrement<T> {
         if best != self.lag && new < cur * T::lit(LAG_SWITCH) {
             self.lag = best;
             self.test.clear_windows();
+        }
+    }
+}
+
+impl<T: Real> IntervalTest<T> for VelocityIncrement<T> {
+    type Config = VelocityIncrementConfig<T>;
+
+    fn invalidate(&mut self) {
+        VelocityIncrement::invalidate(self);
+    }
+
+    fn integrate_sample(&mut self, imu: &ImuVec<T>, dt: T) {
+        let f: Vector3<T> = imu.fixed_rows::<3>(0).into_owned();
+        self.integrate(&f, &imu.fixed_rows::<3>(3).into_owned(), dt);
+    }
+
+    /// An attitude (as the filter fuses it) sets the rotation; a velocity
+    /// the filter fused closes the interval
+    /// ([`velocity_epoch`](VelocityIncrement::velocity_epoch)); one it
+    /// rejected is skipped (the IMU integrates on).
+    fn close(&mut self, cfg: &Self::Config, aiding: &Measurement<T>, ctx: &EpochContext<T>) {
+        let av = &aiding.available;
+        if av.iter().skip(3).all(|a| *a) {
+            let att = aiding.z.fixed_rows::<3>(3);
+            self.attitude_epoch([att.x, att.y, att.z]);
+        }
+        if ctx.fused && av.iter().take(3).all(|a| *a) {
+            let v: Vector3<T> = aiding.z.fixed_rows::<3>(0).into_owned();
+            self.velocity_epoch(cfg, v, &ctx.limits, ctx.timeout_s, ctx.external);
         }
     }
 }

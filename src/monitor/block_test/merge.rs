@@ -8,10 +8,10 @@ use crate::monitor::ChannelState;
 /// Reports the three channels from `first` (0: accelerometer, 3: gyro)
 /// faulty where `test` flags them and the UKF finds them healthy, with the
 /// test's window mean as the estimate; a channel the UKF flags itself is
-/// noted (see [`BlockTest::reports`]). `unjudged`: the UKF's test did not
-/// judge this epoch (`inflation_cover.rs`), so a `NotMonitored` channel
-/// takes the block test's flag too.
-pub(in crate::monitor::ukf_monitor) fn merge_block_flags<T: Real>(
+/// noted (see [`BlockTest::reports`]). `unjudged`: the monitor's own test
+/// did not judge this epoch (`ukf_monitor/inflation_cover.rs`), so a
+/// `NotMonitored` channel takes the block test's flag too.
+pub(in crate::monitor) fn merge_block_flags<T: Real>(
     status: &mut [ChannelState; 6],
     estimate: &mut ImuVec<T>,
     first: usize,

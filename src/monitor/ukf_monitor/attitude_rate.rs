@@ -2,13 +2,11 @@
 //! the IMU samples and the fused attitude epochs, merging its flags into
 //! the report, and resetting it with the monitor.
 
-use nalgebra::Vector3;
-
 use crate::math::Real;
 use crate::model::{ImuVec, Measurement};
-use crate::monitor::ukf_monitor::block_test::merge_block_flags;
+use crate::monitor::block_test::{any_flag, merge_block_flags, EpochContext, IntervalTest};
 use crate::monitor::ukf_monitor::UkfMonitor;
-use crate::monitor::{AttitudeRateDetail, ChannelState, Phase};
+use crate::monitor::{AttitudeRateDetail, Phase};
 
 impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// The test runs (configured; compiled in, as this file is).
@@ -32,16 +30,15 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         dt: T,
         usable: bool,
     ) {
-        if !self.attitude_rate_on() {
-            return;
+        if self.attitude_rate_on() {
+            let live = usable && self.att_rate_live();
+            self.att_rate.sample(imu, dt, live);
         }
-        let learning = matches!(self.phase, Phase::Learning | Phase::Monitoring);
-        if usable && learning && self.stats_holdoff <= T::zero() {
-            let rate: Vector3<T> = imu.fixed_rows::<3>(3).into_owned();
-            self.att_rate.integrate(&rate, dt);
-        } else {
-            self.att_rate.invalidate();
-        }
+    }
+
+    /// Learning or monitoring, statistics not held: the test integrates.
+    fn att_rate_live(&self) -> bool {
+        matches!(self.phase, Phase::Learning | Phase::Monitoring) && self.stats_holdoff <= T::zero()
     }
 
     /// After an aiding update: an attitude epoch the UKF fused closes the
@@ -50,32 +47,20 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let Some(cfg) = self.cfg.attitude_rate else {
             return;
         };
-        if !matches!(self.phase, Phase::Learning | Phase::Monitoring)
-            || self.stats_holdoff > T::zero()
-        {
-            self.att_rate.invalidate();
-            return;
-        }
-        let fused = self
-            .report
-            .detail
-            .diag
-            .iter()
-            .skip(3)
-            .all(|d| d.available && d.fused);
-        if !fused || !aiding.available.iter().skip(3).all(|a| *a) {
-            return;
-        }
-        let att = aiding.z.fixed_rows::<3>(3);
-        let euler = [att.x, att.y, att.z];
-        let limits = self.block_limits(3);
-        let external =
-            self.phase == Phase::Monitoring
-                && self.report.status.iter().any(|s| {
-                    matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative)
-                });
-        self.att_rate
-            .epoch(&cfg, euler, &limits, self.cfg.aiding_timeout_s, external);
+        let ctx = EpochContext {
+            live: self.att_rate_live(),
+            fused: self
+                .report
+                .detail
+                .diag
+                .iter()
+                .skip(3)
+                .all(|d| d.available && d.fused),
+            limits: self.block_limits(3),
+            timeout_s: self.cfg.aiding_timeout_s,
+            external: self.phase == Phase::Monitoring && any_flag(&self.report.status),
+        };
+        self.att_rate.aiding_epoch(&cfg, aiding, &ctx);
     }
 
     /// Adds the test's flags to the report: a gyro channel the UKF finds

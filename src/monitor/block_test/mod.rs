@@ -70,8 +70,10 @@
 use nalgebra::Vector3;
 
 use crate::math::Real;
+use crate::model::{ImuVec, Measurement};
 use crate::monitor::{
-    BlockTestConfig, BlockTestDetail, ATTITUDE_RATE_LENGTHS as NL, ATTITUDE_RATE_MAX_BLOCKS,
+    BlockTestConfig, BlockTestDetail, ChannelState, ATTITUDE_RATE_LENGTHS as NL,
+    ATTITUDE_RATE_MAX_BLOCKS,
 };
 use crate::stats::student_t_upper_quantile;
 
@@ -84,7 +86,68 @@ mod motion_variance_tests;
 #[cfg(test)]
 pub(super) mod test_noise;
 pub(super) use merge::merge_block_flags;
+#[cfg(feature = "attitude-rate-test")]
+pub(super) mod attitude_rate;
 pub(super) mod rotation;
+#[cfg(feature = "velocity-increment-test")]
+pub(super) mod velocity_increment;
+
+/// What a monitor tells a block test at an aiding epoch.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct EpochContext<T> {
+    /// The statistics run (learning or monitoring, not held): else the
+    /// interval under way is dropped.
+    pub live: bool,
+    /// The monitor's filter fused the test's aiding channels this epoch (a
+    /// rejected epoch is skipped: the IMU integrates on to the next).
+    pub fused: bool,
+    /// The monitor's limits for the test's three channels.
+    pub limits: ChannelLimits<T>,
+    /// Longest interval integrated, s (the aiding timeout).
+    pub timeout_s: T,
+    /// The monitor flags a channel itself (monitoring): nothing is learnt
+    /// from the block.
+    pub external: bool,
+}
+
+/// What both tests share with their monitors: IMU samples integrate while
+/// the statistics run and drop the interval otherwise; an aiding epoch
+/// closes it while they run and drops it otherwise.
+pub(super) trait IntervalTest<T: Real> {
+    /// The test's configuration.
+    type Config;
+    /// Drops the interval under way.
+    fn invalidate(&mut self);
+    /// One valid IMU sample (raw) into the interval.
+    fn integrate_sample(&mut self, imu: &ImuVec<T>, dt: T);
+    /// A live aiding epoch (the test's own use of it).
+    fn close(&mut self, cfg: &Self::Config, aiding: &Measurement<T>, ctx: &EpochContext<T>);
+
+    /// One IMU sample; `live`: valid and the statistics run.
+    fn sample(&mut self, imu: &ImuVec<T>, dt: T, live: bool) {
+        if live {
+            self.integrate_sample(imu, dt);
+        } else {
+            self.invalidate();
+        }
+    }
+
+    /// A monitor's aiding epoch.
+    fn aiding_epoch(&mut self, cfg: &Self::Config, aiding: &Measurement<T>, ctx: &EpochContext<T>) {
+        if ctx.live {
+            self.close(cfg, aiding, ctx);
+        } else {
+            self.invalidate();
+        }
+    }
+}
+
+/// A channel of `status` is flagged (either sign).
+pub(super) fn any_flag(status: &[ChannelState; 6]) -> bool {
+    status
+        .iter()
+        .any(|s| matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative))
+}
 
 /// Block means kept: a block is learnt once every decision that saw it
 /// has been made (ages up to two longest windows).

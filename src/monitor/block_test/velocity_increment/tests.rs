@@ -4,7 +4,7 @@
 
 // Test code: a panic is a failed assertion.
 #![allow(clippy::unwrap_used, clippy::indexing_slicing)]
-use super::super::block_test::test_noise::Noise;
+use super::super::test_noise::Noise;
 use super::*;
 use crate::model::G0;
 

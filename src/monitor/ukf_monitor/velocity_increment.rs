@@ -2,13 +2,11 @@
 //! it the IMU samples and the aiding epochs, merging its flags into the
 //! report (accelerometer channels), and resetting it with the monitor.
 
-use nalgebra::Vector3;
-
 use crate::math::Real;
 use crate::model::{ImuVec, Measurement};
-use crate::monitor::ukf_monitor::block_test::merge_block_flags;
+use crate::monitor::block_test::{any_flag, merge_block_flags, EpochContext, IntervalTest};
 use crate::monitor::ukf_monitor::UkfMonitor;
-use crate::monitor::{ChannelState, Phase, VelocityIncrementDetail};
+use crate::monitor::{Phase, VelocityIncrementDetail};
 
 impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// The test runs (configured; compiled in, as this file is).
@@ -41,15 +39,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         dt: T,
         usable: bool,
     ) {
-        if !self.vel_inc_on() {
-            return;
-        }
-        if usable && self.vel_inc_live() {
-            let f: Vector3<T> = imu.fixed_rows::<3>(0).into_owned();
-            let w: Vector3<T> = imu.fixed_rows::<3>(3).into_owned();
-            self.vel_inc.integrate(&f, &w, dt);
-        } else {
-            self.vel_inc.invalidate();
+        if self.vel_inc_on() {
+            let live = usable && self.vel_inc_live();
+            self.vel_inc.sample(imu, dt, live);
         }
     }
 
@@ -60,10 +52,6 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let Some(cfg) = self.cfg.velocity_increment else {
             return;
         };
-        if !self.vel_inc_live() {
-            self.vel_inc.invalidate();
-            return;
-        }
         // The attitude with the learnt heading offset taken off, as the UKF
         // fuses it: an offset turns the horizontal Δv the test integrates
         // (3° on the aircraft: 221/240 episodes, 62 post-clear events).
@@ -74,29 +62,20 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         } else {
             aiding
         };
-        if aiding.available.iter().skip(3).all(|a| *a) {
-            let att = aiding.z.fixed_rows::<3>(3);
-            self.vel_inc.attitude_epoch([att.x, att.y, att.z]);
-        }
-        let fused = self
-            .report
-            .detail
-            .diag
-            .iter()
-            .take(3)
-            .all(|d| d.available && d.fused);
-        if !fused || !aiding.available.iter().take(3).all(|a| *a) {
-            return;
-        }
-        let v: Vector3<T> = aiding.z.fixed_rows::<3>(0).into_owned();
-        let limits = self.block_limits(0);
-        let external =
-            self.phase == Phase::Monitoring
-                && self.report.status.iter().any(|s| {
-                    matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative)
-                });
-        self.vel_inc
-            .velocity_epoch(&cfg, v, &limits, self.cfg.aiding_timeout_s, external);
+        let ctx = EpochContext {
+            live: self.vel_inc_live(),
+            fused: self
+                .report
+                .detail
+                .diag
+                .iter()
+                .take(3)
+                .all(|d| d.available && d.fused),
+            limits: self.block_limits(0),
+            timeout_s: self.cfg.aiding_timeout_s,
+            external: self.phase == Phase::Monitoring && any_flag(&self.report.status),
+        };
+        self.vel_inc.aiding_epoch(&cfg, aiding, &ctx);
     }
 
     /// Adds the test's flags to the report: an accelerometer channel the

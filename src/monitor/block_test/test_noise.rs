@@ -4,7 +4,7 @@
 use nalgebra::Vector3;
 
 /// Deterministic N(0, 1) samples from seed `.0` (non-zero).
-pub(in crate::monitor::ukf_monitor) struct Noise(pub u64);
+pub(in crate::monitor) struct Noise(pub u64);
 
 impl Noise {
     /// A uniform sample in (0, 1).

@@ -44,18 +44,18 @@
 
 use nalgebra::{UnitQuaternion, Vector3};
 
-use super::block_test::rotation::{from_euler, inverse_right_jacobian, rotation_exp, rotation_log};
-use super::block_test::{BlockTest, ChannelLimits};
+use super::rotation::{from_euler, inverse_right_jacobian, rotation_exp, rotation_log};
+use super::{BlockTest, ChannelLimits, EpochContext, IntervalTest};
 use crate::math::Real;
-use crate::monitor::AttitudeRateConfig;
+use crate::model::{ImuVec, Measurement};
+use crate::monitor::{AttitudeRateConfig, UkfMonitorConfig};
 
-mod hooks;
 #[cfg(test)]
 mod tests;
 
 /// The test's state (see the module notes).
 #[derive(Debug, Clone)]
-pub(super) struct AttitudeRate<T> {
+pub(in crate::monitor) struct AttitudeRate<T> {
     /// The gyro rotation since the reference epoch, its time and
     /// `Σ |ω|² dt` over it.
     gyro: UnitQuaternion<T>,
@@ -69,7 +69,7 @@ pub(super) struct AttitudeRate<T> {
     sum: Vector3<T>,
     sum_dt: T,
     /// Blocks, windows, learning and decisions.
-    pub(super) test: BlockTest<T>,
+    pub(in crate::monitor) test: BlockTest<T>,
 }
 
 impl<T: Real> AttitudeRate<T> {
@@ -110,6 +110,11 @@ impl<T: Real> AttitudeRate<T> {
         self.gyro = UnitQuaternion::identity();
         self.gyro_dt = T::zero();
         self.gyro_motion = T::zero();
+    }
+
+    /// The test of a monitor configured with `cfg` (idle when it is off).
+    pub fn for_config(cfg: &UkfMonitorConfig<T>) -> Self {
+        Self::new(cfg.attitude_rate.map_or(0.0, |c| c.alpha()))
     }
 
     /// One IMU sample's rotation.
@@ -164,6 +169,34 @@ impl<T: Real> AttitudeRate<T> {
             self.sum_dt = T::zero();
             self.sum_motion = T::zero();
             self.test.close_block(cfg, mean, motion, limits);
+        }
+    }
+}
+
+impl<T: Real> IntervalTest<T> for AttitudeRate<T> {
+    type Config = AttitudeRateConfig<T>;
+
+    fn invalidate(&mut self) {
+        AttitudeRate::invalidate(self);
+    }
+
+    fn integrate_sample(&mut self, imu: &ImuVec<T>, dt: T) {
+        self.integrate(&imu.fixed_rows::<3>(3).into_owned(), dt);
+    }
+
+    /// An attitude the filter fused closes the interval
+    /// ([`epoch`](AttitudeRate::epoch)); one it rejected is skipped (the
+    /// gyro integrates on).
+    fn close(&mut self, cfg: &Self::Config, aiding: &Measurement<T>, ctx: &EpochContext<T>) {
+        if ctx.fused && aiding.available.iter().skip(3).all(|a| *a) {
+            let att = aiding.z.fixed_rows::<3>(3);
+            self.epoch(
+                cfg,
+                [att.x, att.y, att.z],
+                &ctx.limits,
+                ctx.timeout_s,
+                ctx.external,
+            );
         }
     }
 }
