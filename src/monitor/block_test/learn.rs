@@ -9,7 +9,10 @@ impl<T: Real> BlockTest<T> {
     /// Learnt blocks (forgetting-weighted) at least as active as the
     /// newest window of `len` blocks (its mean squared rate's bin or above).
     pub(super) fn covered(&self, len: usize) -> T {
-        let b = motion_bin(self.mean_motion(0, len).unwrap_or_else(T::zero));
+        let b = motion_bin(
+            self.mean_motion(0, len).unwrap_or_else(T::zero),
+            MOTION_BINS,
+        );
         self.motion_hist
             .iter()
             .skip(b)
@@ -120,7 +123,7 @@ impl<T: Real> BlockTest<T> {
         // The motion the learnt spread holds for: the block counts if any
         // channel learnt it.
         if (0..3).any(|c| worst.get(c).is_some_and(|r| *r < cfg.learn_below)) {
-            let bin = motion_bin(motion);
+            let bin = motion_bin(motion, MOTION_BINS);
             for (k, h) in self.motion_hist.iter_mut().enumerate() {
                 *h = *h * keep + if k == bin { T::one() } else { T::zero() };
             }

@@ -163,15 +163,16 @@ const EXTERNAL_FLAG_RATIO: f64 = 1e3;
 const MOTION_BINS: usize = 24;
 const MOTION_LOG10_MIN: f64 = -8.0;
 
-/// The motion bin of a block's motion measure.
-fn motion_bin<T: Real>(m: T) -> usize {
+/// The motion bin of a motion measure among `bins` half-decade bins from
+/// 1e-8 up (the last open); shared with the UKF monitor's inflation cover.
+pub(in crate::monitor) fn motion_bin<T: Real>(m: T, bins: usize) -> usize {
     let x: f64 = m.to_f64();
     let l = libm::log10(if x > 1e-30 { x } else { 1e-30 });
     let b: f64 = libm::floor((l - MOTION_LOG10_MIN) * 2.0);
     if b <= 0.0 {
         0
     } else {
-        (b as usize).min(MOTION_BINS - 1)
+        (b as usize).min(bins.saturating_sub(1))
     }
 }
 

@@ -40,17 +40,9 @@ use crate::model::NZ;
 /// Bins of the window motion (the aiding's mean squared rate, rad²/s²), half a decade
 /// each from 1e-8 up; the last is open.
 const BINS: usize = 20;
-const LOG10_MIN: f64 = -8.0;
 
 fn bin<T: Real>(m: T) -> usize {
-    let x: f64 = m.to_f64();
-    let l = libm::log10(if x > 1e-30 { x } else { 1e-30 });
-    let b: f64 = libm::floor((l - LOG10_MIN) * 2.0);
-    if b <= 0.0 {
-        0
-    } else {
-        (b as usize).min(BINS - 1)
-    }
+    crate::monitor::block_test::motion_bin(m, BINS)
 }
 
 /// An angle difference brought into (−π, π].
