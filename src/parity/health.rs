@@ -54,8 +54,15 @@ pub enum SensorStatus {
     /// Failed: clipping for `rail_samples` periods in a row while most other
     /// sensors did not (output railed at full scale).
     Railed,
-    /// Failed: isolated by the parity test and removed from the set.
+    /// Out of the set: isolated by the parity test. The multi-scale
+    /// monitor keeps judging it against the sensors in the set and
+    /// re-admits it once its error has decayed (see
+    /// [`Probation`](Self::Probation)); otherwise latched until reset.
     ParityIsolated,
+    /// Out of the set, isolated by the parity test and consistent with the
+    /// sensors in the set since the latest decision: counting the probation
+    /// that re-admits it (multi-scale monitor, `docs/recovery.md`).
+    Probation,
 }
 
 impl SensorStatus {
@@ -73,8 +80,12 @@ impl SensorStatus {
 }
 
 impl SensorStatus {
-    /// True for the latched states: the sensor is out of the set until
-    /// [`reset`](super::ParityMonitor::reset).
+    /// True for the states that put the sensor out of the set: the
+    /// hardware failures until [`reset`](super::ParityMonitor::reset), a
+    /// parity isolation until reset or re-admission
+    /// ([`ParityIsolated`](Self::ParityIsolated),
+    /// [`Probation`](Self::Probation): its samples are not used while it
+    /// is judged).
     pub fn is_failed(self) -> bool {
         matches!(
             self,
@@ -84,7 +95,13 @@ impl SensorStatus {
                 | Self::BusFailure
                 | Self::Railed
                 | Self::ParityIsolated
+                | Self::Probation
         )
+    }
+
+    /// Out of the set by a parity isolation (may be re-admitted).
+    pub fn is_parity_out(self) -> bool {
+        matches!(self, Self::ParityIsolated | Self::Probation)
     }
 }
 
@@ -168,10 +185,21 @@ impl<T: Real> SensorHealth<T> {
         cfg: &HealthConfig<T>,
     ) -> (Option<T>, SensorStatus) {
         let (value, status) = self.classify(reading, cfg);
-        if let Some(failed) = self.latched {
-            return (None, failed);
+        match self.latched {
+            // Out of the set by the parity test: still checked, and its
+            // sample handed on (the monitor judges it for re-admission but
+            // never fuses it). A hardware failure now latches over the
+            // isolation, with that failure's policy (until reset).
+            Some(out) if out.is_parity_out() => {
+                if status.is_failed() {
+                    self.latched = Some(status);
+                    return (None, status);
+                }
+                (value, out)
+            }
+            Some(failed) => (None, failed),
+            None => (value, status),
         }
-        (value, status)
     }
 
     /// Latches `status` (a failure) until reset.
@@ -239,6 +267,29 @@ impl<T: Real> SensorHealth<T> {
     /// Marks the sensor failed by the parity test.
     pub fn isolate(&mut self) {
         self.latched = Some(SensorStatus::ParityIsolated);
+    }
+
+    /// Marks a parity-isolated sensor on probation (`true`) or back to
+    /// isolated (`false`); a hardware failure stays as it is.
+    pub fn set_probation(&mut self, on: bool) {
+        if self.latched.is_some_and(SensorStatus::is_parity_out) {
+            self.latched = Some(if on {
+                SensorStatus::Probation
+            } else {
+                SensorStatus::ParityIsolated
+            });
+        }
+    }
+
+    /// Re-admits a parity-isolated sensor (its hardware checks go on from
+    /// their running state); a hardware failure stays latched. True when
+    /// it was re-admitted.
+    pub fn readmit(&mut self) -> bool {
+        if self.latched.is_some_and(SensorStatus::is_parity_out) {
+            self.latched = None;
+            return true;
+        }
+        false
     }
 
     /// Consecutive clipping samples so far.

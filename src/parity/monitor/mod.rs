@@ -18,11 +18,14 @@ mod build;
 mod external;
 mod flight;
 mod fusion;
+mod readmit;
 mod reconfig;
 mod white;
 
 use flight::BlockSums;
 use fusion::{fuse_subset, FusionCache};
+use readmit::Readmission;
+pub use readmit::MAX_ISOLATIONS;
 use reconfig::Reconfig;
 use white::Tests;
 
@@ -90,6 +93,9 @@ pub struct ParityReport<T: Real, const N: usize> {
     pub bias_estimate: T,
     /// Sensor isolated and removed in this period.
     pub isolated: Option<usize>,
+    /// Sensor re-admitted into the set in this period, after its
+    /// probation (multi-scale tests, see `docs/recovery.md`).
+    pub readmitted: Option<usize>,
     /// At least half of the sensors still in the set clip this period: a
     /// common-mode saturation (violent manoeuvre, crash), not a sensor fault.
     pub common_mode_saturation: bool,
@@ -163,6 +169,9 @@ pub struct ParityMonitor<T: Real, const N: usize, const W: usize> {
     /// so the per-sample fusion reuses it (issue 14: the 3×3 Cholesky and
     /// inverse were ≈ 1 k instructions of every M4F step).
     fusion: Option<FusionCache<T, N>>,
+    /// A sensor isolated by the multi-scale tests, judged for re-admission
+    /// by the full set's frozen tests (`readmit.rs`).
+    readmission: Readmission<T, N, W>,
 }
 
 impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
@@ -210,6 +219,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             suspect: None,
             bias_estimate: T::zero(),
             isolated: None,
+            readmitted: None,
             common_mode_saturation: false,
             parity_dim: space.dim(),
             multiscale: MultiscaleDecision::default(),
@@ -247,6 +257,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             reconfig: Reconfig::Idle,
             held: None,
             fusion: None,
+            readmission: Readmission::default(),
         }
         .with_multiscale()
     }
@@ -303,6 +314,8 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let mut status = [SensorStatus::Healthy; N];
         let mut quiet = true;
         let (health, removed, cfg) = (&mut self.health, &self.removed, &self.cfg.health);
+        let judged = self.readmission.sensor();
+        let mut gap = false;
         // The sample vector built by `from_fn`, in sensor order: a zero fill
         // written over in the loop was not removed by the compiler (a
         // 36-byte `memclr` call per step, 36 instructions on the M4F).
@@ -315,9 +328,12 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             let (value, s) = health.check_unlatched(*reading, cfg);
             // Healthy, or failed before and already out of the set.
             quiet &= s == SensorStatus::Healthy || (*removed && health.failure().is_some());
+            // A parity-isolated sensor's sample is read (for its
+            // re-admission), never used.
             if let Some(u) = usable.get_mut(k) {
-                *u = value.is_some();
+                *u = value.is_some() && !*removed;
             }
+            gap |= judged == Some(k) && value.is_none();
             if let Some(st) = status.get_mut(k) {
                 *st = s;
             }
@@ -338,6 +354,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         };
         self.last.decision = false;
         self.last.isolated = None;
+        self.last.readmitted = None;
         self.last.common_mode_saturation = common_mode;
         self.last.fused = self.fuse_usable(&m, &usable);
         // One stage of a reconfiguration in progress, or else of the
@@ -347,6 +364,10 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let staged = !self.configured();
         self.advance_reconfig(false);
         self.multiscale_advance(false);
+        if let Some(sh) = self.readmission.shadow.as_mut() {
+            sh.gap |= gap;
+            self.shadow_step();
+        }
         let all_active_usable = self
             .space
             .active()
@@ -487,6 +508,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             h.isolate();
         }
         if self.ms.is_some() {
+            self.start_shadow(k);
             self.exclude_between_blocks(k);
         } else {
             self.exclude(k);
@@ -502,6 +524,10 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         // A reconfiguration still in progress ends first (a second
         // failure within its few steps).
         self.advance_reconfig(true);
+        if self.readmission.sensor().is_some_and(|j| j != k) {
+            // The shadow's space holds the sensor leaving now.
+            self.drop_shadow();
+        }
         match self.removed.get_mut(k) {
             Some(r) if !*r => *r = true,
             _ => return,
@@ -546,6 +572,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             ParityPhase::Lost
         };
         // No parity space is left; fusion uses the health masks.
+        self.drop_shadow();
         self.tests = None;
         self.ms = None;
         None

@@ -233,6 +233,16 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         }
     }
 
+    /// Every window length has a score: the ring holds the longest window.
+    pub fn windows_full(&self) -> bool {
+        self.filled >= usize::from(self.cfg.scales[SCALES - 1])
+    }
+
+    /// Longest window length, blocks.
+    pub fn longest(&self) -> u16 {
+        self.cfg.scales[SCALES - 1]
+    }
+
     /// The threshold of each window length.
     pub fn threshold_set(&self) -> [T; SCALES] {
         self.scale_h
