@@ -159,6 +159,8 @@ pub struct SensorHealth<T> {
     bus_errors_total: u32,
     clipping: u16,
     latched: Option<SensorStatus>,
+    /// See [`out_sample`](Self::out_sample).
+    out_sample: Option<T>,
 }
 
 impl<T: Real> SensorHealth<T> {
@@ -185,20 +187,42 @@ impl<T: Real> SensorHealth<T> {
         cfg: &HealthConfig<T>,
     ) -> (Option<T>, SensorStatus) {
         let (value, status) = self.classify(reading, cfg);
-        match self.latched {
-            // Out of the set by the parity test: still checked, and its
-            // sample handed on (the monitor judges it for re-admission but
-            // never fuses it). A hardware failure now latches over the
-            // isolation, with that failure's policy (until reset).
-            Some(out) if out.is_parity_out() => {
-                if status.is_failed() {
-                    self.latched = Some(status);
-                    return (None, status);
-                }
-                (value, out)
+        if let Some(failed) = self.latched {
+            if failed.is_parity_out() {
+                return self.out_of_set(value, status, failed);
             }
-            Some(failed) => (None, failed),
-            None => (value, status),
+            return (None, failed);
+        }
+        (value, status)
+    }
+
+    /// A sensor out of the set by the parity test: still checked, its
+    /// usable sample kept for [`out_sample`](Self::out_sample) (the monitor
+    /// judges it for re-admission, never fuses it). A hardware failure now
+    /// latches over the isolation, with that failure's policy (until
+    /// reset). Out of line: the usual sample never comes here.
+    #[inline(never)]
+    fn out_of_set(
+        &mut self,
+        value: Option<T>,
+        status: SensorStatus,
+        out: SensorStatus,
+    ) -> (Option<T>, SensorStatus) {
+        self.out_sample = value;
+        if status.is_failed() {
+            self.latched = Some(status);
+            return (None, status);
+        }
+        (None, out)
+    }
+
+    /// The latest usable sample of a sensor out of the set by the parity
+    /// test (`None`: unusable this period, or not out of the set).
+    pub fn out_sample(&self) -> Option<T> {
+        if self.latched.is_some_and(SensorStatus::is_parity_out) {
+            self.out_sample
+        } else {
+            None
         }
     }
 

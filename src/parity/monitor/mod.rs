@@ -178,6 +178,10 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// A monitor of the array `geometry`. Errors: rank-deficient geometry,
     /// fewer than four sensors, a window longer than `W` or zero, a bad
     /// false-alarm probability.
+    // Out of line: its temporaries (two `Multiscale` of ≈ 15 KB for nine
+    // sensors, the report) then live in its own frame, not in the caller's
+    // for as long as the caller runs.
+    #[inline(never)]
     pub fn new(geometry: &Geometry<T, N>, cfg: ParityConfig<T>) -> Result<Self, ConfigError> {
         cfg.validate()?;
         if cfg.window_blocks == 0 || cfg.window_blocks > W || cfg.block_len == 0 {
@@ -224,7 +228,19 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             parity_dim: space.dim(),
             multiscale: MultiscaleDecision::default(),
         };
-        Self {
+        // The multi-scale tests when they are the detector (their
+        // thresholds are computed here, once). The monitor is built in the
+        // return value, not moved through a builder: each move is a copy
+        // of the whole monitor on the stack (≈ 38 KB for nine sensors).
+        let ms = match cfg.detector {
+            ParityDetector::Multiscale => {
+                let h = Multiscale::<T, N, W>::thresholds(&cfg.multiscale)
+                    .ok_or(ConfigError::Multiscale)?;
+                Some(Multiscale::new(cfg.multiscale, space.dim(), h))
+            }
+            _ => None,
+        };
+        Ok(Self {
             trainer: Trainer::new(cfg.train_samples, cfg.block_len, cfg.ridge),
             cfg,
             space,
@@ -246,7 +262,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             calibrated: 0,
             chi2,
             last: report,
-            ms: None,
+            ms,
             ms_block: BlockSums::default(),
             ms_prev: None,
             ms_hold: 0,
@@ -257,20 +273,8 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             reconfig: Reconfig::Idle,
             held: None,
             fusion: None,
-            readmission: Readmission::default(),
-        }
-        .with_multiscale()
-    }
-
-    /// Creates the multi-scale tests when they are the detector (their
-    /// thresholds are computed here, once).
-    fn with_multiscale(mut self) -> Result<Self, ConfigError> {
-        if self.cfg.detector == ParityDetector::Multiscale {
-            let h = Multiscale::<T, N, W>::thresholds(&self.cfg.multiscale)
-                .ok_or(ConfigError::Multiscale)?;
-            self.ms = Some(Multiscale::new(self.cfg.multiscale, self.space.dim(), h));
-        }
-        Ok(self)
+            readmission: Readmission::new(space, cfg.multiscale),
+        })
     }
 
     /// Back to training with every sensor healthy (an explicit reset after
@@ -314,12 +318,11 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let mut status = [SensorStatus::Healthy; N];
         let mut quiet = true;
         let (health, removed, cfg) = (&mut self.health, &self.removed, &self.cfg.health);
-        let judged = self.readmission.sensor();
-        let mut gap = false;
+
         // The sample vector built by `from_fn`, in sensor order: a zero fill
         // written over in the loop was not removed by the compiler (a
         // 36-byte `memclr` call per step, 36 instructions on the M4F).
-        let m = SVector::<T, N>::from_fn(|k, _| {
+        let mut m = SVector::<T, N>::from_fn(|k, _| {
             let (Some(reading), Some(health), Some(removed)) =
                 (readings.get(k), health.get_mut(k), removed.get(k))
             else {
@@ -328,12 +331,9 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             let (value, s) = health.check_unlatched(*reading, cfg);
             // Healthy, or failed before and already out of the set.
             quiet &= s == SensorStatus::Healthy || (*removed && health.failure().is_some());
-            // A parity-isolated sensor's sample is read (for its
-            // re-admission), never used.
             if let Some(u) = usable.get_mut(k) {
-                *u = value.is_some() && !*removed;
+                *u = value.is_some();
             }
-            gap |= judged == Some(k) && value.is_none();
             if let Some(st) = status.get_mut(k) {
                 *st = s;
             }
@@ -364,9 +364,8 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let staged = !self.configured();
         self.advance_reconfig(false);
         self.multiscale_advance(false);
-        if let Some(sh) = self.readmission.shadow.as_mut() {
-            sh.gap |= gap;
-            self.shadow_step();
+        if self.readmission.sensor().is_some() {
+            self.shadow_step(&mut m);
         }
         let all_active_usable = self
             .space

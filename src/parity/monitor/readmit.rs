@@ -56,8 +56,8 @@ use nalgebra::{SVector, Vector3};
 
 use crate::math::Real;
 
-use super::super::multiscale::{Multiscale, Outcome, REGRESSORS};
-use super::super::ParitySpace;
+use super::super::multiscale::{Multiscale, MultiscaleConfig, Outcome, REGRESSORS, SCALES};
+use super::super::{ParitySpace, SensorHealth};
 use super::flight::BlockSums;
 use super::{ParityMonitor, Reconfig};
 
@@ -65,12 +65,17 @@ use super::{ParityMonitor, Reconfig};
 /// re-admission (it stays out until reset).
 pub const MAX_ISOLATIONS: u8 = 3;
 
-/// The full set's tests, kept at an isolation, judging the isolated
-/// sensor.
+/// Re-admission state of the monitor: the full set's tests kept at an
+/// isolation (the shadow), judging the isolated sensor.
+///
+/// The shadow's storage is always there and written in place (the
+/// monitor's learning copied into it at the isolation, swapped with the
+/// monitor's tests at the re-admission): a `Multiscale` moved through an
+/// `Option` on the stack is ≈ 15 KB per copy on the M4F.
 #[derive(Debug, Clone)]
-pub(super) struct Shadow<T: Real, const N: usize, const W: usize> {
-    /// The sensor judged.
-    sensor: usize,
+pub(super) struct Readmission<T: Real, const N: usize, const W: usize> {
+    /// The sensor judged (`None`: no shadow; the fields below are unused).
+    sensor: Option<usize>,
     /// The full set's parity space.
     space: ParitySpace<T, N>,
     /// Its tests (alarms act only on the probation).
@@ -80,34 +85,34 @@ pub(super) struct Shadow<T: Real, const N: usize, const W: usize> {
     prev: Option<(SVector<T, N>, Vector3<T>, SVector<T, N>)>,
     prev2: Option<Vector3<T>>,
     /// A sample of the sensor was unusable in the block being accumulated.
-    pub(super) gap: bool,
+    gap: bool,
     /// Consecutive counting decisions below threshold.
     quiet: u32,
     /// Decisions the probation needs.
     needed: u32,
-}
-
-/// Re-admission state of the monitor.
-#[derive(Debug, Clone)]
-pub(super) struct Readmission<T: Real, const N: usize, const W: usize> {
-    pub(super) shadow: Option<Shadow<T, N, W>>,
     /// Parity isolations of each sensor since reset.
     isolations: [u8; N],
 }
 
-impl<T: Real, const N: usize, const W: usize> Default for Readmission<T, N, W> {
-    fn default() -> Self {
+impl<T: Real, const N: usize, const W: usize> Readmission<T, N, W> {
+    /// No sensor judged; `space` and `cfg` only size the idle storage.
+    pub(super) fn new(space: ParitySpace<T, N>, cfg: MultiscaleConfig<T>) -> Self {
         Self {
-            shadow: None,
+            sensor: None,
+            space,
+            ms: Multiscale::new(cfg, space.dim(), [T::one(); SCALES]),
+            prev: None,
+            prev2: None,
+            gap: false,
+            quiet: 0,
+            needed: 0,
             isolations: [0; N],
         }
     }
-}
 
-impl<T: Real, const N: usize, const W: usize> Readmission<T, N, W> {
     /// The sensor judged, if any.
     pub(super) fn sensor(&self) -> Option<usize> {
-        self.shadow.as_ref().map(|s| s.sensor)
+        self.sensor
     }
 }
 
@@ -122,32 +127,27 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         };
         *count = count.saturating_add(1);
         let count = *count;
+        let r = &mut self.readmission;
         let Some(ms) = self.ms.as_ref().filter(|_| self.ms_trained) else {
             return;
         };
         if count >= MAX_ISOLATIONS {
             return;
         }
-        let mut ms = *ms;
-        ms.cancel();
-        ms.clear_window();
-        let needed = (2 * u32::from(ms.longest())) << count.saturating_sub(1);
-        self.readmission.shadow = Some(Shadow {
-            sensor: k,
-            space: self.space,
-            ms,
-            prev: self.ms_prev,
-            prev2: self.ms_prev2,
-            gap: false,
-            quiet: 0,
-            needed,
-        });
+        r.ms.copy_learning_from(ms);
+        r.needed = (2 * u32::from(r.ms.longest())) << count.saturating_sub(1);
+        r.sensor = Some(k);
+        r.space = self.space;
+        r.prev = self.ms_prev;
+        r.prev2 = self.ms_prev2;
+        r.gap = false;
+        r.quiet = 0;
     }
 
     /// Ends the judging of the sensor under probation (it stays isolated).
     pub(super) fn drop_shadow(&mut self) {
-        if let Some(sh) = self.readmission.shadow.take() {
-            if let Some(h) = self.health.get_mut(sh.sensor) {
+        if let Some(k) = self.readmission.sensor.take() {
+            if let Some(h) = self.health.get_mut(k) {
                 h.set_probation(false);
             }
         }
@@ -157,62 +157,68 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// variances) into the shadow: finishes its previous decision and
     /// starts this block's predecessor, as the monitor does.
     pub(super) fn shadow_block(&mut self, mean: &SVector<T, N>, e: &SVector<T, N>) {
-        let Some(sh) = self.readmission.shadow.as_mut() else {
+        let Some(k) = self.readmission.sensor else {
             return;
         };
-        let failed = self.health.get(sh.sensor).and_then(|h| h.failure());
+        let failed = self.health.get(k).and_then(|h| h.failure());
         if !failed.is_some_and(|s| s.is_parity_out()) {
-            // A hardware failure latched over the isolation (or the
-            // sensor is back by another way): no more judging.
-            self.readmission.shadow = None;
+            // A hardware failure latched over the isolation: no more
+            // judging.
+            self.readmission.sensor = None;
             return;
         }
-        if sh.ms.pending().is_some() {
-            let o = sh.ms.finish(sh.space.v(), sh.space.active());
+        let r = &mut self.readmission;
+        if r.ms.pending().is_some() {
+            let o = r.ms.finish(r.space.v(), r.space.active());
             self.shadow_outcome(o);
         }
-        let Some(sh) = self.readmission.shadow.as_mut() else {
-            return;
-        };
-        if core::mem::take(&mut sh.gap) {
+        let r = &mut self.readmission;
+        if core::mem::take(&mut r.gap) {
             // The block lacks samples of the sensor: not judged, and the
             // probation starts again.
-            sh.quiet = 0;
-            sh.prev = None;
-            sh.prev2 = None;
-            if let Some(h) = self.health.get_mut(sh.sensor) {
+            r.quiet = 0;
+            r.prev = None;
+            r.prev2 = None;
+            if let Some(h) = self.health.get_mut(k) {
                 h.set_probation(false);
             }
             return;
         }
-        let (p, x) = (sh.space.v() * mean, sh.space.lsq() * mean);
-        if let (Some((p_prev, x_prev, e_prev)), Some(x_before)) = (sh.prev, sh.prev2) {
+        let (p, x) = (r.space.v() * mean, r.space.lsq() * mean);
+        if let (Some((p_prev, x_prev, e_prev)), Some(x_before)) = (r.prev, r.prev2) {
             let dx = (x - x_before) * T::lit(0.5);
-            let phi: SVector<T, REGRESSORS> = sh.ms.regressor(&x_prev, &dx, &e_prev);
+            let phi: SVector<T, REGRESSORS> = r.ms.regressor(&x_prev, &dx, &e_prev);
             let level = e_prev.sum().max(T::zero()).sqrt();
-            sh.ms.begin(&p_prev, &phi, level, None);
+            r.ms.begin(&p_prev, &phi, level, None);
         }
-        sh.prev2 = sh.prev.map(|(_, x, _)| x);
-        sh.prev = Some((p, x, *e));
+        r.prev2 = r.prev.map(|(_, x, _)| x);
+        r.prev = Some((p, x, *e));
     }
 
     /// One stage of the shadow's decision in work; a re-admission when
     /// its probation is complete and the monitor is between stages.
+    /// The judged sensor's sample (read and checked, never fused) goes
+    /// into `m` for the block sums; an unusable one marks the block.
     /// Out of line: most steps have no shadow.
     #[inline(never)]
-    pub(super) fn shadow_step(&mut self) {
-        let Some(sh) = self.readmission.shadow.as_mut() else {
+    pub(super) fn shadow_step(&mut self, m: &mut SVector<T, N>) {
+        let Some(k) = self.readmission.sensor else {
             return;
         };
-        if sh.ms.pending().is_some() {
-            let o = sh.ms.advance(sh.space.v(), sh.space.active());
+        match (
+            self.health.get(k).and_then(SensorHealth::out_sample),
+            m.get_mut(k),
+        ) {
+            (Some(v), Some(slot)) => *slot = v,
+            _ => self.readmission.gap = true,
+        }
+        let r = &mut self.readmission;
+        if r.ms.pending().is_some() {
+            let o = r.ms.advance(r.space.v(), r.space.active());
             self.shadow_outcome(o);
         }
-        let ready = self
-            .readmission
-            .shadow
-            .as_ref()
-            .is_some_and(|sh| sh.quiet >= sh.needed);
+        let r = &self.readmission;
+        let ready = r.sensor.is_some() && r.quiet >= r.needed;
         let idle = self.configured() && self.ms.as_ref().is_none_or(|ms| ms.pending().is_none());
         if ready && idle {
             self.readmit();
@@ -221,13 +227,14 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
 
     /// Applies a shadow decision to the probation count.
     fn shadow_outcome(&mut self, o: Outcome<T>) {
-        let Some(sh) = self.readmission.shadow.as_mut() else {
+        let r = &mut self.readmission;
+        let Some(k) = r.sensor else {
             return;
         };
         let quiet = match o {
             Outcome::Busy | Outcome::Trained(_) => return,
             // Decisions count once every window length has a score.
-            Outcome::Decided(Some(d)) if !sh.ms.windows_full() => {
+            Outcome::Decided(Some(d)) if !r.ms.windows_full() => {
                 if d.ratio <= T::one() {
                     return;
                 }
@@ -236,29 +243,33 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             Outcome::Decided(Some(d)) => d.ratio <= T::one(),
             Outcome::Decided(None) => false,
         };
-        sh.quiet = if quiet { sh.quiet.saturating_add(1) } else { 0 };
-        if let Some(h) = self.health.get_mut(sh.sensor) {
-            h.set_probation(sh.quiet > 0);
+        r.quiet = if quiet { r.quiet.saturating_add(1) } else { 0 };
+        let on = r.quiet > 0;
+        if let Some(h) = self.health.get_mut(k) {
+            h.set_probation(on);
         }
     }
 
-    /// Puts the judged sensor back into the set with the shadow's tests.
+    /// Puts the judged sensor back into the set with the shadow's tests
+    /// (swapped in place; the reduced set's tests are dropped).
     fn readmit(&mut self) {
-        let Some(sh) = self.readmission.shadow.take() else {
+        let Some(k) = self.readmission.sensor.take() else {
             return;
         };
-        let k = sh.sensor;
+        let Some(ms) = self.ms.as_mut() else {
+            return;
+        };
         if !self.health.get_mut(k).is_some_and(|h| h.readmit()) {
             return;
         }
         if let Some(r) = self.removed.get_mut(k) {
             *r = false;
         }
-        self.ms = Some(sh.ms);
+        core::mem::swap(ms, &mut self.readmission.ms);
         self.reconfig = Reconfig::Idle;
-        self.space = sh.space;
-        self.ms_prev = sh.prev;
-        self.ms_prev2 = sh.prev2;
+        self.space = self.readmission.space;
+        self.ms_prev = self.readmission.prev;
+        self.ms_prev2 = self.readmission.prev2;
         // The block being accumulated, into the full space (its sums are
         // linear in the samples, which include the sensor's).
         let block = self.ms_block;
