@@ -394,4 +394,50 @@ mod tests {
         assert_eq!(h.check(Reading::BusError, &cfg).1, SensorStatus::BusError);
         assert_eq!(h.bus_errors_total(), 10);
     }
+
+    #[test]
+    fn a_parity_isolated_sensor_is_still_checked_and_a_hardware_failure_latches_over_it() {
+        let cfg = HealthConfig::new(10.0_f64);
+        let mut h = SensorHealth::default();
+        h.isolate();
+        // Its sample is kept for the shadow tests, never handed out.
+        assert_eq!(
+            h.check_unlatched(Reading::Sample(1.0), &cfg),
+            (None, SensorStatus::ParityIsolated)
+        );
+        assert_eq!(h.out_sample(), Some(1.0));
+        h.set_probation(true);
+        assert_eq!(
+            h.check_unlatched(Reading::Missing, &cfg),
+            (None, SensorStatus::Probation)
+        );
+        assert_eq!(h.out_sample(), None);
+        assert!(SensorStatus::Probation.is_failed());
+        // Re-admitted: back to its per-period statuses.
+        assert!(h.readmit());
+        assert_eq!(
+            h.check_unlatched(Reading::Sample(2.0), &cfg),
+            (Some(2.0), SensorStatus::Healthy)
+        );
+        // Isolated again, then five NaN: the hardware latch replaces the
+        // isolation and is not re-admitted.
+        h.isolate();
+        for _ in 0..4 {
+            assert_eq!(
+                h.check_unlatched(Reading::Sample(f64::NAN), &cfg).1,
+                SensorStatus::ParityIsolated
+            );
+        }
+        assert_eq!(
+            h.check_unlatched(Reading::Sample(f64::NAN), &cfg).1,
+            SensorStatus::InvalidOutput
+        );
+        h.set_probation(true);
+        assert!(!h.readmit());
+        assert_eq!(
+            h.check_unlatched(Reading::Sample(1.0), &cfg),
+            (None, SensorStatus::InvalidOutput)
+        );
+        assert_eq!(h.out_sample(), None);
+    }
 }
