@@ -16,7 +16,7 @@ use std::path::Path;
 
 use hal_sim::array::ArrayKind;
 use imu_fdi_cli::eval::parity_replay::{
-    power_up_table, read_imu_log, replay_parity, replay_parity_with, step_table, ImuLog,
+    power_up_table, read_imu_log, replay_parity, replay_parity_with, step_table, ImuLog, Injection,
     ParityMethod, PowerUpCase, StepCase,
 };
 
@@ -233,4 +233,143 @@ fn a_gyro_bias_present_from_power_up_is_reported_without_naming_a_healthy_sensor
     assert!(held_out
         .iter()
         .all(|c| c.delay.is_some() && !c.wrong_isolation));
+}
+
+/// Re-admission (docs/recovery.md, "Parity monitor"): GIVEN a 1-s +3 m/s²
+/// glitch on IMU0 a_x at 140 s (a shock that passes the hardware checks),
+/// WHEN it is isolated, THEN the sensor is judged by the full set's frozen
+/// tests and re-admitted after its probation, with no alarm between the
+/// re-admission and the crash, which is still alarmed. The same for a
+/// 20 °/s 1-s glitch on IMU1 g_x at 150 s (a case not diagnosed on).
+#[test]
+fn a_short_glitch_is_isolated_then_readmitted_and_the_crash_still_alarmed() {
+    let log = log();
+    for (kind, imu, channel, size, start, sensor) in [
+        (ArrayKind::Accel, 0, 0, 3.0, 140.0, 0),
+        (ArrayKind::Gyro, 1, 3, 20f64.to_radians(), 150.0, 3),
+    ] {
+        let inj = Injection {
+            imu,
+            channel,
+            size,
+            start,
+            end: start + 1.0,
+        };
+        let r = replay_parity(&log, kind, 80.0, 30.0, Some(inj)).unwrap();
+        let (k, t_iso) = r.isolations.first().copied().unwrap();
+        assert_eq!(k, sensor, "{:?}", r.isolations);
+        assert!((start..start + 3.0).contains(&t_iso), "{t_iso}");
+        let (k, t_back) = r.readmissions.first().copied().unwrap();
+        assert_eq!(k, sensor);
+        // At least the longest window filled plus the probation after the
+        // isolation: 40 + 80 blocks of 12 samples at 49 Hz = 29.4 s, from
+        // the blocks just before the isolation
+        // (measured: 170.70 s and 180.62 s).
+        assert!(
+            (t_iso + 28.0..t_iso + 40.0).contains(&t_back),
+            "{t_iso} {t_back}"
+        );
+        assert!(r.statuses.iter().any(|(j, s, t)| *j == sensor
+            && *s == imu_fdi::parity::SensorStatus::Probation
+            && *t > t_iso
+            && *t < t_back));
+        // No alarm from the glitch's end to the crash, one at the crash.
+        assert!(
+            r.alarms.iter().all(|a| a.0 < start + 3.0 || a.0 >= CRASH),
+            "{:?}",
+            r.alarms
+        );
+        assert!(r.alarms.iter().any(|a| a.0 >= CRASH), "{:?}", r.alarms);
+        assert_eq!(
+            r.isolations.iter().filter(|(_, t)| *t < CRASH).count(),
+            1,
+            "{:?}",
+            r.isolations
+        );
+    }
+}
+
+/// A persistent 2 °/s bias on IMU1 g_x from 140 s to the end is isolated
+/// and never re-admitted while it lasts.
+#[test]
+fn a_persistent_bias_is_never_readmitted() {
+    let log = log();
+    for (imu, axis, sign) in [(1, 0, 1.0), (0, 2, -1.0), (2, 1, 1.0)] {
+        let inj = Injection {
+            imu,
+            channel: 3 + axis,
+            size: sign * 2f64.to_radians(),
+            start: 140.0,
+            end: f64::INFINITY,
+        };
+        let r = replay_parity(&log, ArrayKind::Gyro, 80.0, 30.0, Some(inj)).unwrap();
+        let sensor = 3 * imu + axis;
+        assert!(
+            r.isolations.iter().any(|(k, t)| *k == sensor && *t < 160.0),
+            "{:?}",
+            r.isolations
+        );
+        assert!(
+            r.readmissions.iter().all(|(k, _)| *k != sensor),
+            "{:?}",
+            r.readmissions
+        );
+    }
+}
+
+/// An intermittent sensor (docs/recovery.md): 1-s +5 m/s² glitches on
+/// IMU0 a_x at 115, 150 and 205 s (and at 115, 175 and 225 s). Each is
+/// isolated; the first re-admission follows the 20-s probation, the second
+/// the doubled 40-s one, and the third isolation (`MAX_ISOLATIONS`) stays
+/// for good: the alarms are bounded to three. Before the re-admitted
+/// tests took the calibration of one to two longest windows before the
+/// isolation, the 205-s glitch was not even alarmed (the glitch at 150 s
+/// had been learned into the calibration before its alarm).
+#[test]
+fn an_intermittent_sensor_gets_longer_probations_then_stays_out() {
+    for glitches in [[115.0, 150.0, 205.0], [115.0, 175.0, 225.0]] {
+        let mut log = log();
+        for (t, row) in log.t.iter().zip(log.imus.iter_mut()) {
+            if glitches.iter().any(|s| (*s..*s + 1.0).contains(t)) {
+                if let Some(v) = row.get_mut(0).and_then(|imu| imu.get_mut(0)) {
+                    *v += 5.0;
+                }
+            }
+        }
+        let r = replay_parity(&log, ArrayKind::Accel, 80.0, 30.0, None).unwrap();
+        let iso: Vec<f64> = r
+            .isolations
+            .iter()
+            .filter(|(k, t)| *k == 0 && *t < CRASH)
+            .map(|(_, t)| *t)
+            .collect();
+        let back: Vec<f64> = r
+            .readmissions
+            .iter()
+            .filter(|(k, _)| *k == 0)
+            .map(|(_, t)| *t)
+            .collect();
+        assert_eq!(
+            iso.len(),
+            imu_fdi::parity::MAX_ISOLATIONS as usize,
+            "{iso:?}"
+        );
+        assert!(glitches
+            .iter()
+            .zip(iso.iter())
+            .all(|(g, i)| (*g..*g + 3.0).contains(i)));
+        assert_eq!(back.len(), 2, "{back:?} {iso:?}");
+        // Probation 80 then 160 blocks of 0.245 s after the 40-block fill.
+        assert!(
+            back[0] - iso[0] >= 28.0 && back[0] - iso[0] < 40.0,
+            "{back:?} {iso:?}"
+        );
+        assert!(
+            back[1] - iso[1] >= 48.0 && back[1] - iso[1] < 60.0,
+            "{back:?} {iso:?}"
+        );
+        assert!(iso[1] > back[0] && iso[2] > back[1]);
+        // No other sensor isolated before the crash.
+        assert!(r.isolations.iter().all(|(k, t)| *k == 0 || *t >= CRASH));
+    }
 }

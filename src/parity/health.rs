@@ -54,8 +54,15 @@ pub enum SensorStatus {
     /// Failed: clipping for `rail_samples` periods in a row while most other
     /// sensors did not (output railed at full scale).
     Railed,
-    /// Failed: isolated by the parity test and removed from the set.
+    /// Out of the set: isolated by the parity test. The multi-scale
+    /// monitor keeps judging it against the sensors in the set and
+    /// re-admits it once its error has decayed (see
+    /// [`Probation`](Self::Probation)); otherwise latched until reset.
     ParityIsolated,
+    /// Out of the set, isolated by the parity test and consistent with the
+    /// sensors in the set since the latest decision: counting the probation
+    /// that re-admits it (multi-scale monitor, `docs/recovery.md`).
+    Probation,
 }
 
 impl SensorStatus {
@@ -73,8 +80,12 @@ impl SensorStatus {
 }
 
 impl SensorStatus {
-    /// True for the latched states: the sensor is out of the set until
-    /// [`reset`](super::ParityMonitor::reset).
+    /// True for the states that put the sensor out of the set: the
+    /// hardware failures until [`reset`](super::ParityMonitor::reset), a
+    /// parity isolation until reset or re-admission
+    /// ([`ParityIsolated`](Self::ParityIsolated),
+    /// [`Probation`](Self::Probation): its samples are not used while it
+    /// is judged).
     pub fn is_failed(self) -> bool {
         matches!(
             self,
@@ -84,7 +95,13 @@ impl SensorStatus {
                 | Self::BusFailure
                 | Self::Railed
                 | Self::ParityIsolated
+                | Self::Probation
         )
+    }
+
+    /// Out of the set by a parity isolation (may be re-admitted).
+    pub fn is_parity_out(self) -> bool {
+        matches!(self, Self::ParityIsolated | Self::Probation)
     }
 }
 
@@ -142,6 +159,8 @@ pub struct SensorHealth<T> {
     bus_errors_total: u32,
     clipping: u16,
     latched: Option<SensorStatus>,
+    /// See [`out_sample`](Self::out_sample).
+    out_sample: Option<T>,
 }
 
 impl<T: Real> SensorHealth<T> {
@@ -169,9 +188,42 @@ impl<T: Real> SensorHealth<T> {
     ) -> (Option<T>, SensorStatus) {
         let (value, status) = self.classify(reading, cfg);
         if let Some(failed) = self.latched {
+            if failed.is_parity_out() {
+                return self.out_of_set(value, status, failed);
+            }
             return (None, failed);
         }
         (value, status)
+    }
+
+    /// A sensor out of the set by the parity test: still checked, its
+    /// usable sample kept for [`out_sample`](Self::out_sample) (the monitor
+    /// judges it for re-admission, never fuses it). A hardware failure now
+    /// latches over the isolation, with that failure's policy (until
+    /// reset). Out of line: the usual sample never comes here.
+    #[inline(never)]
+    fn out_of_set(
+        &mut self,
+        value: Option<T>,
+        status: SensorStatus,
+        out: SensorStatus,
+    ) -> (Option<T>, SensorStatus) {
+        self.out_sample = value;
+        if status.is_failed() {
+            self.latched = Some(status);
+            return (None, status);
+        }
+        (None, out)
+    }
+
+    /// The latest usable sample of a sensor out of the set by the parity
+    /// test (`None`: unusable this period, or not out of the set).
+    pub fn out_sample(&self) -> Option<T> {
+        if self.latched.is_some_and(SensorStatus::is_parity_out) {
+            self.out_sample
+        } else {
+            None
+        }
     }
 
     /// Latches `status` (a failure) until reset.
@@ -239,6 +291,29 @@ impl<T: Real> SensorHealth<T> {
     /// Marks the sensor failed by the parity test.
     pub fn isolate(&mut self) {
         self.latched = Some(SensorStatus::ParityIsolated);
+    }
+
+    /// Marks a parity-isolated sensor on probation (`true`) or back to
+    /// isolated (`false`); a hardware failure stays as it is.
+    pub fn set_probation(&mut self, on: bool) {
+        if self.latched.is_some_and(SensorStatus::is_parity_out) {
+            self.latched = Some(if on {
+                SensorStatus::Probation
+            } else {
+                SensorStatus::ParityIsolated
+            });
+        }
+    }
+
+    /// Re-admits a parity-isolated sensor (its hardware checks go on from
+    /// their running state); a hardware failure stays latched. True when
+    /// it was re-admitted.
+    pub fn readmit(&mut self) -> bool {
+        if self.latched.is_some_and(SensorStatus::is_parity_out) {
+            self.latched = None;
+            return true;
+        }
+        false
     }
 
     /// Consecutive clipping samples so far.
@@ -318,5 +393,51 @@ mod tests {
         h.check(Reading::Sample(0.1), &cfg);
         assert_eq!(h.check(Reading::BusError, &cfg).1, SensorStatus::BusError);
         assert_eq!(h.bus_errors_total(), 10);
+    }
+
+    #[test]
+    fn a_parity_isolated_sensor_is_still_checked_and_a_hardware_failure_latches_over_it() {
+        let cfg = HealthConfig::new(10.0_f64);
+        let mut h = SensorHealth::default();
+        h.isolate();
+        // Its sample is kept for the shadow tests, never handed out.
+        assert_eq!(
+            h.check_unlatched(Reading::Sample(1.0), &cfg),
+            (None, SensorStatus::ParityIsolated)
+        );
+        assert_eq!(h.out_sample(), Some(1.0));
+        h.set_probation(true);
+        assert_eq!(
+            h.check_unlatched(Reading::Missing, &cfg),
+            (None, SensorStatus::Probation)
+        );
+        assert_eq!(h.out_sample(), None);
+        assert!(SensorStatus::Probation.is_failed());
+        // Re-admitted: back to its per-period statuses.
+        assert!(h.readmit());
+        assert_eq!(
+            h.check_unlatched(Reading::Sample(2.0), &cfg),
+            (Some(2.0), SensorStatus::Healthy)
+        );
+        // Isolated again, then five NaN: the hardware latch replaces the
+        // isolation and is not re-admitted.
+        h.isolate();
+        for _ in 0..4 {
+            assert_eq!(
+                h.check_unlatched(Reading::Sample(f64::NAN), &cfg).1,
+                SensorStatus::ParityIsolated
+            );
+        }
+        assert_eq!(
+            h.check_unlatched(Reading::Sample(f64::NAN), &cfg).1,
+            SensorStatus::InvalidOutput
+        );
+        h.set_probation(true);
+        assert!(!h.readmit());
+        assert_eq!(
+            h.check_unlatched(Reading::Sample(1.0), &cfg),
+            (None, SensorStatus::InvalidOutput)
+        );
+        assert_eq!(h.out_sample(), None);
     }
 }

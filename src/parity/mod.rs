@@ -30,7 +30,9 @@ mod validate;
 pub use config::{ParityConfig, ParityDetector};
 pub use geometry::{euler_rotation, yaw_rotation, Geometry};
 pub use health::{HealthConfig, Reading, SensorHealth, SensorStatus};
-pub use monitor::{reconfig_steps, DetectorFlags, ParityMonitor, ParityPhase, ParityReport};
+pub use monitor::{
+    reconfig_steps, DetectorFlags, ParityMonitor, ParityPhase, ParityReport, MAX_ISOLATIONS,
+};
 pub use multiscale::{
     BlockStage, MultiscaleConfig, MultiscaleDecision, REGRESSORS, SCALES, STAGES,
 };

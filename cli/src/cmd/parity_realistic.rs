@@ -84,7 +84,7 @@ pub(crate) fn run(a: Args) -> Result<()> {
         let mut steps_json = Vec::new();
         if !a.json {
             out!(
-                "{}: {:.2} h fault-free: {} alarm events ({:.2}/h), {} sensors isolated{}",
+                "{}: {:.2} h fault-free: {} alarm events ({:.2}/h), {} sensors isolated ({} re-admitted){}",
                 if kind == ArrayKind::Gyro {
                     "gyro"
                 } else {
@@ -94,6 +94,7 @@ pub(crate) fn run(a: Args) -> Result<()> {
                 ff.alarm_events,
                 ff.alarm_events as f64 / ff.hours.max(1e-9),
                 ff.isolations,
+                ff.readmissions,
                 if kind == ArrayKind::Gyro {
                     format!(", {:.1} s judged at rest", ff.at_rest_s)
                 } else {
@@ -157,6 +158,7 @@ pub(crate) fn run(a: Args) -> Result<()> {
             "fault_free_alarm_events": ff.alarm_events,
             "fault_free_alarms_per_hour": ff.alarm_events as f64 / ff.hours.max(1e-9),
             "fault_free_isolations": ff.isolations,
+            "fault_free_readmissions": ff.readmissions,
             "fault_free_at_rest_s": ff.at_rest_s,
             "steps": steps_json,
         }));

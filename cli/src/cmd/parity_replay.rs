@@ -30,7 +30,8 @@ pub(crate) struct Args {
     inject: Vec<f64>,
     /// Print one JSON object instead of text: {"gyro": {"monitoring_from_s",
     /// "power_up_judged", "alarms": [{"start_s", "end_s", "sensor"}], "isolations": [{"sensor",
-    /// "t_s"}], "statuses": [...]}, "accel": {...}}, sensor = 3·IMU + axis.
+    /// "t_s"}], "statuses": [...], "readmissions": [{"sensor", "t_s"}]}, "accel": {...}},
+    /// sensor = 3·IMU + axis.
     #[arg(long)]
     json: bool,
 }
@@ -192,6 +193,19 @@ pub(crate) fn parity_replay_cmd(
                 "none".into()
             } else {
                 iso.join(", ")
+            }
+        );
+        let back: Vec<String> = r
+            .readmissions
+            .iter()
+            .map(|(k, t)| format!("sensor {k} at {t:.2}"))
+            .collect();
+        out!(
+            "  re-admissions: {}",
+            if back.is_empty() {
+                "none".into()
+            } else {
+                back.join(", ")
             }
         );
         let st: Vec<String> = r

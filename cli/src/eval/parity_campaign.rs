@@ -29,6 +29,8 @@ pub struct FaultFree {
     pub alarm_events: usize,
     /// Sensors isolated (all healthy here).
     pub isolations: usize,
+    /// Isolated sensors re-admitted after their probation.
+    pub readmissions: usize,
     /// Seconds the gyro rest check judged the vehicle at rest (the
     /// realistic profile flies throughout: any is a false rest).
     pub at_rest_s: f64,
@@ -85,8 +87,15 @@ pub struct AlarmEvent {
 }
 
 /// Alarm start times, isolations `(sensor, t)`, monitored seconds, seconds
-/// judged at rest and the alarm events of one flight.
-type Flight = (Vec<f64>, Vec<(usize, f64)>, f64, f64, Vec<AlarmEvent>);
+/// judged at rest, the alarm events and the re-admissions of one flight.
+type Flight = (
+    Vec<f64>,
+    Vec<(usize, f64)>,
+    f64,
+    f64,
+    Vec<AlarmEvent>,
+    usize,
+);
 
 /// Seconds of simulated truth kept for [`AlarmEvent::true_drift`].
 const TRUTH_MEMORY_S: f64 = 120.0;
@@ -144,6 +153,7 @@ fn run(
     };
     let block_s = f64::from(cfg.block_len) / profile.log_hz;
     let (mut alarms, mut isolations, mut events) = (Vec::new(), Vec::new(), Vec::new());
+    let mut readmissions = 0;
     let mut truth: std::collections::VecDeque<(f64, [f64; 9])> = Default::default();
     let mut open: Option<AlarmEvent> = None;
     let (mut was, mut from, mut last) = (false, None, 0.0);
@@ -187,6 +197,7 @@ fn run(
         if let Some(k) = r.isolated {
             isolations.push((k, row.t));
         }
+        readmissions += usize::from(r.readmitted.is_some());
         if let Some(e) = open.as_mut() {
             let m = r.multiscale;
             if r.fault && f64::from(m.ratio) > e.ratio {
@@ -220,6 +231,7 @@ fn run(
         from.map_or(0.0, |f| last - f),
         rest_s,
         events,
+        readmissions,
     ))
 }
 
@@ -258,10 +270,11 @@ pub fn fault_free_flights_on(
         .collect::<Result<_>>()?;
     Ok(runs
         .iter()
-        .fold(FaultFree::default(), |mut acc, (a, iso, s, r, ev)| {
+        .fold(FaultFree::default(), |mut acc, (a, iso, s, r, ev, back)| {
             acc.hours += s / 3600.0;
             acc.alarm_events += a.len();
             acc.isolations += iso.len();
+            acc.readmissions += back;
             acc.at_rest_s += r;
             acc.events.extend_from_slice(ev);
             acc
@@ -322,7 +335,7 @@ pub fn steps_on(
         .par_iter()
         .map(|&(sd, imu, axis, sign)| {
             let fault = ChannelFault::bias(imu, channel0 + axis, onset, onset + 15.0, sign * size);
-            let (alarms, iso, _, _, _) = run(kind, &profile, sd, Some(fault))?;
+            let (alarms, iso, _, _, _, _) = run(kind, &profile, sd, Some(fault))?;
             let sensor = 3 * imu + axis;
             let hit = iso
                 .iter()

@@ -154,6 +154,9 @@ pub struct ParityReplay {
     pub alarms: Vec<(f64, f64, Option<usize>)>,
     /// Isolations (sensor = 3·imu + axis, time).
     pub isolations: Vec<(usize, f64)>,
+    /// Re-admissions of parity-isolated sensors after their probation
+    /// (sensor, time).
+    pub readmissions: Vec<(usize, f64)>,
     /// First time each (sensor, non-healthy status) was seen.
     pub statuses: Vec<(usize, SensorStatus, f64)>,
     /// Common-mode saturation intervals (start, end, –).
@@ -378,6 +381,9 @@ pub fn replay_parity_observed(
         }
         if let Some(k) = r.isolated {
             out.isolations.push((k, *t));
+        }
+        if let Some(k) = r.readmitted {
+            out.readmissions.push((k, *t));
         }
         if out.monitoring_from.is_some() {
             edge(&mut out.alarms, r.fault, &mut was, *t, r.suspect);

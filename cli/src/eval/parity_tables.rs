@@ -168,7 +168,7 @@ pub fn power_up_table(
 /// `imu-fdi-sim parity-replay --json`): `{"gyro": {"monitoring_from_s",
 /// "power_up_judged", "alarms": [{"start_s", "end_s", "sensor"}],
 /// "isolations": [{"sensor", "t_s"}], "statuses": [{"sensor", "status",
-/// "t_s"}]}, "accel": {…}}`,
+/// "t_s"}], "readmissions": [{"sensor", "t_s"}]}, "accel": {…}}`,
 /// sensor = 3 × IMU + axis, times in seconds of the file's clock, `null`
 /// where a value does not exist (no monitoring, no suspect).
 pub fn replay_json(
@@ -195,6 +195,11 @@ pub fn replay_json(
             .iter()
             .map(|(k, t)| serde_json::json!({"sensor": k, "t_s": t}))
             .collect();
+        let readmissions: Vec<_> = r
+            .readmissions
+            .iter()
+            .map(|(k, t)| serde_json::json!({"sensor": k, "t_s": t}))
+            .collect();
         let statuses: Vec<_> = r
             .statuses
             .iter()
@@ -210,6 +215,7 @@ pub fn replay_json(
                 "alarms": alarms,
                 "isolations": isolations,
                 "statuses": statuses,
+                "readmissions": readmissions,
             }),
         );
     }

@@ -26,6 +26,7 @@ pub fn status_text(s: SensorStatus) -> &'static str {
         SensorStatus::BusFailure => "bus failure (failed)",
         SensorStatus::Railed => "railed (failed)",
         SensorStatus::ParityIsolated => "isolated by the parity test (failed)",
+        SensorStatus::Probation => "on probation after a parity isolation (out of the set)",
     }
 }
 

@@ -35,6 +35,26 @@ impl<T: Real, const N: usize> Default for BlockSums<T, N> {
 }
 
 impl<T: Real, const N: usize> BlockSums<T, N> {
+    /// First sample of the block (`None`: empty).
+    pub(super) fn m0(&self) -> Option<SVector<T, N>> {
+        self.m0
+    }
+
+    /// Samples in the block.
+    pub(super) fn len(&self) -> u16 {
+        self.n
+    }
+
+    /// `Σ (m − m₀)` over the block.
+    pub(super) fn m_sum(&self) -> SVector<T, N> {
+        self.m
+    }
+
+    /// The same sums with the parity and fused sums of another space.
+    pub(super) fn with_projection(self, p: SVector<T, N>, x: Vector3<T>) -> Self {
+        Self { p, x, ..self }
+    }
+
     /// Adds one sample; the samples in the block now. Out of line: compiled
     /// into `step_ref` its sums cost ≈ 30 instructions more per sample on
     /// the M4F, by how much else was live in registers around them.
@@ -78,7 +98,12 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let (pb, xb) = (b.p / n, b.x / n);
         let mean = b.m / n;
         let eb = (b.mm / n - mean.component_mul(&mean)).map(|v| v.max(T::zero()));
+        let full_mean = b.m0.map(|m0| m0 + mean);
         self.ms_block = BlockSums::default();
+        if let Some(m) = full_mean.filter(|_| self.readmission.sensor().is_some()) {
+            // The parity-isolated sensor's shadow tests take the block too.
+            self.shadow_block(&m, &eb);
+        }
         // A reconfiguration still carrying the learning ends first.
         self.advance_reconfig(true);
         // Blocks shorter than the stages: the work in progress ends now.

@@ -18,11 +18,14 @@ mod build;
 mod external;
 mod flight;
 mod fusion;
+mod readmit;
 mod reconfig;
 mod white;
 
 use flight::BlockSums;
 use fusion::{fuse_subset, FusionCache};
+use readmit::Readmission;
+pub use readmit::MAX_ISOLATIONS;
 use reconfig::Reconfig;
 use white::Tests;
 
@@ -90,6 +93,9 @@ pub struct ParityReport<T: Real, const N: usize> {
     pub bias_estimate: T,
     /// Sensor isolated and removed in this period.
     pub isolated: Option<usize>,
+    /// Sensor re-admitted into the set in this period, after its
+    /// probation (multi-scale tests, see `docs/recovery.md`).
+    pub readmitted: Option<usize>,
     /// At least half of the sensors still in the set clip this period: a
     /// common-mode saturation (violent manoeuvre, crash), not a sensor fault.
     pub common_mode_saturation: bool,
@@ -163,12 +169,19 @@ pub struct ParityMonitor<T: Real, const N: usize, const W: usize> {
     /// so the per-sample fusion reuses it (issue 14: the 3×3 Cholesky and
     /// inverse were ≈ 1 k instructions of every M4F step).
     fusion: Option<FusionCache<T, N>>,
+    /// A sensor isolated by the multi-scale tests, judged for re-admission
+    /// by the full set's frozen tests (`readmit.rs`).
+    readmission: Readmission<T, N, W>,
 }
 
 impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// A monitor of the array `geometry`. Errors: rank-deficient geometry,
     /// fewer than four sensors, a window longer than `W` or zero, a bad
     /// false-alarm probability.
+    // Out of line: its temporaries (two `Multiscale` of ≈ 15 KB for nine
+    // sensors, the report) then live in its own frame, not in the caller's
+    // for as long as the caller runs.
+    #[inline(never)]
     pub fn new(geometry: &Geometry<T, N>, cfg: ParityConfig<T>) -> Result<Self, ConfigError> {
         cfg.validate()?;
         if cfg.window_blocks == 0 || cfg.window_blocks > W || cfg.block_len == 0 {
@@ -210,11 +223,24 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             suspect: None,
             bias_estimate: T::zero(),
             isolated: None,
+            readmitted: None,
             common_mode_saturation: false,
             parity_dim: space.dim(),
             multiscale: MultiscaleDecision::default(),
         };
-        Self {
+        // The multi-scale tests when they are the detector (their
+        // thresholds are computed here, once). The monitor is built in the
+        // return value, not moved through a builder: each move is a copy
+        // of the whole monitor on the stack (≈ 38 KB for nine sensors).
+        let ms = match cfg.detector {
+            ParityDetector::Multiscale => {
+                let h = Multiscale::<T, N, W>::thresholds(&cfg.multiscale)
+                    .ok_or(ConfigError::Multiscale)?;
+                Some(Multiscale::new(cfg.multiscale, space.dim(), h))
+            }
+            _ => None,
+        };
+        Ok(Self {
             trainer: Trainer::new(cfg.train_samples, cfg.block_len, cfg.ridge),
             cfg,
             space,
@@ -236,7 +262,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             calibrated: 0,
             chi2,
             last: report,
-            ms: None,
+            ms,
             ms_block: BlockSums::default(),
             ms_prev: None,
             ms_hold: 0,
@@ -247,19 +273,8 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             reconfig: Reconfig::Idle,
             held: None,
             fusion: None,
-        }
-        .with_multiscale()
-    }
-
-    /// Creates the multi-scale tests when they are the detector (their
-    /// thresholds are computed here, once).
-    fn with_multiscale(mut self) -> Result<Self, ConfigError> {
-        if self.cfg.detector == ParityDetector::Multiscale {
-            let h = Multiscale::<T, N, W>::thresholds(&self.cfg.multiscale)
-                .ok_or(ConfigError::Multiscale)?;
-            self.ms = Some(Multiscale::new(self.cfg.multiscale, self.space.dim(), h));
-        }
-        Ok(self)
+            readmission: Readmission::new(space, cfg.multiscale),
+        })
     }
 
     /// Back to training with every sensor healthy (an explicit reset after
@@ -303,10 +318,11 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let mut status = [SensorStatus::Healthy; N];
         let mut quiet = true;
         let (health, removed, cfg) = (&mut self.health, &self.removed, &self.cfg.health);
+
         // The sample vector built by `from_fn`, in sensor order: a zero fill
         // written over in the loop was not removed by the compiler (a
         // 36-byte `memclr` call per step, 36 instructions on the M4F).
-        let m = SVector::<T, N>::from_fn(|k, _| {
+        let mut m = SVector::<T, N>::from_fn(|k, _| {
             let (Some(reading), Some(health), Some(removed)) =
                 (readings.get(k), health.get_mut(k), removed.get(k))
             else {
@@ -338,6 +354,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         };
         self.last.decision = false;
         self.last.isolated = None;
+        self.last.readmitted = None;
         self.last.common_mode_saturation = common_mode;
         self.last.fused = self.fuse_usable(&m, &usable);
         // One stage of a reconfiguration in progress, or else of the
@@ -347,6 +364,9 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let staged = !self.configured();
         self.advance_reconfig(false);
         self.multiscale_advance(false);
+        if self.readmission.sensor().is_some() {
+            self.shadow_step(&mut m);
+        }
         let all_active_usable = self
             .space
             .active()
@@ -487,6 +507,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             h.isolate();
         }
         if self.ms.is_some() {
+            self.start_shadow(k);
             self.exclude_between_blocks(k);
         } else {
             self.exclude(k);
@@ -502,6 +523,10 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         // A reconfiguration still in progress ends first (a second
         // failure within its few steps).
         self.advance_reconfig(true);
+        if self.readmission.sensor().is_some_and(|j| j != k) {
+            // The shadow's space holds the sensor leaving now.
+            self.drop_shadow();
+        }
         match self.removed.get_mut(k) {
             Some(r) if !*r => *r = true,
             _ => return,
@@ -546,6 +571,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             ParityPhase::Lost
         };
         // No parity space is left; fusion uses the health masks.
+        self.drop_shadow();
         self.tests = None;
         self.ms = None;
         None

@@ -248,6 +248,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             }
             BlockStage::Learn => {
                 self.learn_quiet();
+                self.snapshot_calibration();
                 BlockStage::Offset
             }
             BlockStage::Offset => {

@@ -1,0 +1,296 @@
+//! Re-admission of a sensor isolated by the multi-scale tests, once its
+//! error has decayed ("never stuck": a shock or a bus hiccup that passes
+//! the hardware checks must not cost the board its redundancy for good).
+//!
+//! **The statistic.** At the isolation the full set's parity space and
+//! multi-scale tests — the relative calibration, the block and window
+//! covariances, the vibration law and the thresholds, all learned on the
+//! healthy flight before it — are kept as a *shadow*, their window emptied
+//! (it held the fault). Every block the shadow is fed the full set's block
+//! means (the isolated sensor's samples go on being read and checked, never
+//! fused) and decides exactly as the monitor would with the sensor back:
+//! the same GLR scores against the same thresholds, so a score below
+//! threshold on every window length is the tests' own "consistent", at
+//! their false-alarm probability, with no margin set by hand. Its alarms
+//! act on nothing but the probation.
+//!
+//! The shadow learns under the tests' own gate (a block is learned only
+//! after a whole longest window of decisions below `learn_below` of their
+//! thresholds, `multiscale::staged`), as the monitor does for the sensors
+//! in the set: a fault large enough to be detected holds its scores above
+//! the gate and is never learned, while the calibration keeps tracking the
+//! slow relative drift. Frozen at the isolation instead, it aged: on
+//! log171 (training from 100 s) a 15-s 0.5 m/s² a_z step isolated at
+//! 197.5 s was re-admitted at 232.4 s with a 35-s-old calibration that
+//! alarmed on IMU2 a_z at 237.7 s, two new false alarms in the 0.5 m/s²
+//! table (493/0 → 491/2); learning, 493/0.
+//!
+//! The calibration it starts from is not the current one but the one of
+//! one to two longest windows before the isolation (`Multiscale` keeps one
+//! every longest window): a fault's first blocks are decided before any
+//! score rises and are learned into the current calibration. On log171 a
+//! 1-s 5 m/s² glitch learned that way hid the next glitches on the same
+//! sensor after its re-admission (never alarmed, where a fresh monitor
+//! isolates them); from the older calibration they are isolated as by a
+//! fresh monitor (`cli/tests/parity_log171.rs`).
+//!
+//! **The rule.** Decisions count once every window length has a score (the
+//! longest window, 10 s by default, filled with blocks after the
+//! isolation). The sensor is re-admitted after `2 × longest` consecutive
+//! such decisions (20 s by default) with every score, on every window length
+//! and every sensor hypothesis, and the gross test, below its threshold —
+//! two disjoint longest windows judged quiet, so an error that comes back
+//! within a longest window is seen by every window length before the
+//! sensor is; any decision above threshold, or a sample of the sensor
+//! missing or unusable, restarts the count. A sensor
+//! isolated again after a re-admission has its probation doubled each time;
+//! at its [`MAX_ISOLATIONS`]-th isolation it stays out until reset
+//! (an intermittent sensor: the alarm chatter is bounded to that many
+//! isolations).
+//!
+//! **Re-admission** restores the shadow as the monitor's tests: the full
+//! space and its learning (not retrained), with the window of the probation
+//! blocks, so the tests go on exactly where the shadow's decisions were.
+//! What the reduced set learned meanwhile is dropped.
+//!
+//! **Limits.** One sensor is judged at a time: a second isolation, or a
+//! hardware failure of any sensor, while one is out ends its judging (the
+//! shadow's space holds the sensor that just left), and it stays isolated
+//! until reset. Isolations by an external verdict (the rest check) and the
+//! white-noise tests' isolations stay latched until reset. Hardware
+//! failures keep their latch-until-reset policy, also when they occur on a
+//! sensor under judgement.
+
+use nalgebra::{SVector, Vector3};
+
+use crate::math::Real;
+
+use super::super::multiscale::{Multiscale, MultiscaleConfig, Outcome, REGRESSORS, SCALES};
+use super::super::{ParitySpace, SensorHealth};
+use super::flight::BlockSums;
+use super::{ParityMonitor, Reconfig};
+
+/// Parity isolations of one sensor after which it is no longer judged for
+/// re-admission (it stays out until reset).
+pub const MAX_ISOLATIONS: u8 = 3;
+
+/// Re-admission state of the monitor: the full set's tests kept at an
+/// isolation (the shadow), judging the isolated sensor.
+///
+/// The shadow's storage is always there and written in place (the
+/// monitor's learning copied into it at the isolation, swapped with the
+/// monitor's tests at the re-admission): a `Multiscale` moved through an
+/// `Option` on the stack is ≈ 15 KB per copy on the M4F.
+#[derive(Debug, Clone)]
+pub(super) struct Readmission<T: Real, const N: usize, const W: usize> {
+    /// The sensor judged (`None`: no shadow; the fields below are unused).
+    sensor: Option<usize>,
+    /// The full set's parity space.
+    space: ParitySpace<T, N>,
+    /// Its tests (alarms act only on the probation).
+    ms: Multiscale<T, N, W>,
+    /// Block before (`p̄`, `x̄`, per-sensor variance) and the fused mean
+    /// before it, in the full space (the centred-difference regressor).
+    prev: Option<(SVector<T, N>, Vector3<T>, SVector<T, N>)>,
+    prev2: Option<Vector3<T>>,
+    /// A sample of the sensor was unusable in the block being accumulated.
+    gap: bool,
+    /// Consecutive counting decisions below threshold.
+    quiet: u32,
+    /// Decisions the probation needs.
+    needed: u32,
+    /// Parity isolations of each sensor since reset.
+    isolations: [u8; N],
+}
+
+impl<T: Real, const N: usize, const W: usize> Readmission<T, N, W> {
+    /// No sensor judged; `space` and `cfg` only size the idle storage.
+    pub(super) fn new(space: ParitySpace<T, N>, cfg: MultiscaleConfig<T>) -> Self {
+        Self {
+            sensor: None,
+            space,
+            ms: Multiscale::new(cfg, space.dim(), [T::one(); SCALES]),
+            prev: None,
+            prev2: None,
+            gap: false,
+            quiet: 0,
+            needed: 0,
+            isolations: [0; N],
+        }
+    }
+
+    /// The sensor judged, if any.
+    pub(super) fn sensor(&self) -> Option<usize> {
+        self.sensor
+    }
+}
+
+impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
+    /// Called before sensor `k` is excluded by the multi-scale tests: keeps
+    /// the full set's tests to judge it (unless it reached
+    /// [`MAX_ISOLATIONS`]). Another sensor judged meanwhile stays out.
+    pub(super) fn start_shadow(&mut self, k: usize) {
+        self.drop_shadow();
+        let Some(count) = self.readmission.isolations.get_mut(k) else {
+            return;
+        };
+        *count = count.saturating_add(1);
+        let count = *count;
+        let r = &mut self.readmission;
+        let Some(ms) = self.ms.as_ref().filter(|_| self.ms_trained) else {
+            return;
+        };
+        if count >= MAX_ISOLATIONS {
+            return;
+        }
+        r.ms.copy_learning_from(ms);
+        r.needed = (2 * u32::from(r.ms.longest())) << count.saturating_sub(1);
+        r.sensor = Some(k);
+        r.space = self.space;
+        r.prev = self.ms_prev;
+        r.prev2 = self.ms_prev2;
+        r.gap = false;
+        r.quiet = 0;
+    }
+
+    /// Ends the judging of the sensor under probation (it stays isolated).
+    pub(super) fn drop_shadow(&mut self) {
+        if let Some(k) = self.readmission.sensor.take() {
+            if let Some(h) = self.health.get_mut(k) {
+                h.set_probation(false);
+            }
+        }
+    }
+
+    /// A complete block (`mean`: the sensors' block means, `e` their
+    /// variances) into the shadow: finishes its previous decision and
+    /// starts this block's predecessor, as the monitor does.
+    pub(super) fn shadow_block(&mut self, mean: &SVector<T, N>, e: &SVector<T, N>) {
+        let Some(k) = self.readmission.sensor else {
+            return;
+        };
+        let failed = self.health.get(k).and_then(|h| h.failure());
+        if !failed.is_some_and(|s| s.is_parity_out()) {
+            // A hardware failure latched over the isolation: no more
+            // judging.
+            self.readmission.sensor = None;
+            return;
+        }
+        let r = &mut self.readmission;
+        if r.ms.pending().is_some() {
+            let o = r.ms.finish(r.space.v(), r.space.active());
+            self.shadow_outcome(o);
+        }
+        let r = &mut self.readmission;
+        if core::mem::take(&mut r.gap) {
+            // The block lacks samples of the sensor: not judged, and the
+            // probation starts again.
+            r.quiet = 0;
+            r.prev = None;
+            r.prev2 = None;
+            if let Some(h) = self.health.get_mut(k) {
+                h.set_probation(false);
+            }
+            return;
+        }
+        let (p, x) = (r.space.v() * mean, r.space.lsq() * mean);
+        if let (Some((p_prev, x_prev, e_prev)), Some(x_before)) = (r.prev, r.prev2) {
+            let dx = (x - x_before) * T::lit(0.5);
+            let phi: SVector<T, REGRESSORS> = r.ms.regressor(&x_prev, &dx, &e_prev);
+            let level = e_prev.sum().max(T::zero()).sqrt();
+            r.ms.begin(&p_prev, &phi, level, None);
+        }
+        r.prev2 = r.prev.map(|(_, x, _)| x);
+        r.prev = Some((p, x, *e));
+    }
+
+    /// One stage of the shadow's decision in work; a re-admission when
+    /// its probation is complete and the monitor is between stages.
+    /// The judged sensor's sample (read and checked, never fused) goes
+    /// into `m` for the block sums; an unusable one marks the block.
+    /// Out of line: most steps have no shadow.
+    #[inline(never)]
+    pub(super) fn shadow_step(&mut self, m: &mut SVector<T, N>) {
+        let Some(k) = self.readmission.sensor else {
+            return;
+        };
+        match (
+            self.health.get(k).and_then(SensorHealth::out_sample),
+            m.get_mut(k),
+        ) {
+            (Some(v), Some(slot)) => *slot = v,
+            _ => self.readmission.gap = true,
+        }
+        let r = &mut self.readmission;
+        if r.ms.pending().is_some() {
+            let o = r.ms.advance(r.space.v(), r.space.active());
+            self.shadow_outcome(o);
+        }
+        let r = &self.readmission;
+        let ready = r.sensor.is_some() && r.quiet >= r.needed;
+        let idle = self.configured() && self.ms.as_ref().is_none_or(|ms| ms.pending().is_none());
+        if ready && idle {
+            self.readmit();
+        }
+    }
+
+    /// Applies a shadow decision to the probation count.
+    fn shadow_outcome(&mut self, o: Outcome<T>) {
+        let r = &mut self.readmission;
+        let Some(k) = r.sensor else {
+            return;
+        };
+        let quiet = match o {
+            Outcome::Busy | Outcome::Trained(_) => return,
+            // Decisions count once every window length has a score.
+            Outcome::Decided(Some(d)) if !r.ms.windows_full() => {
+                if d.ratio <= T::one() {
+                    return;
+                }
+                false
+            }
+            Outcome::Decided(Some(d)) => d.ratio <= T::one(),
+            Outcome::Decided(None) => false,
+        };
+        r.quiet = if quiet { r.quiet.saturating_add(1) } else { 0 };
+        let on = r.quiet > 0;
+        if let Some(h) = self.health.get_mut(k) {
+            h.set_probation(on);
+        }
+    }
+
+    /// Puts the judged sensor back into the set with the shadow's tests
+    /// (swapped in place; the reduced set's tests are dropped).
+    fn readmit(&mut self) {
+        let Some(k) = self.readmission.sensor.take() else {
+            return;
+        };
+        let Some(ms) = self.ms.as_mut() else {
+            return;
+        };
+        if !self.health.get_mut(k).is_some_and(|h| h.readmit()) {
+            return;
+        }
+        if let Some(r) = self.removed.get_mut(k) {
+            *r = false;
+        }
+        core::mem::swap(ms, &mut self.readmission.ms);
+        self.reconfig = Reconfig::Idle;
+        self.space = self.readmission.space;
+        self.ms_prev = self.readmission.prev;
+        self.ms_prev2 = self.readmission.prev2;
+        // The block being accumulated, into the full space (its sums are
+        // linear in the samples, which include the sensor's).
+        let block = self.ms_block;
+        if let Some(m0) = block.m0() {
+            let sum_m = m0 * T::lit(f64::from(block.len())) + block.m_sum();
+            self.ms_block = block.with_projection(self.space.v() * sum_m, self.space.lsq() * sum_m);
+        } else {
+            self.ms_block = BlockSums::default();
+        }
+        self.ms_hold = 0;
+        self.ms_above = 0;
+        self.suspect_run = (None, 0);
+        self.last.readmitted = Some(k);
+    }
+}
