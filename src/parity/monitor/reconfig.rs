@@ -1,7 +1,9 @@
 //! Reconfiguration after an isolation or a failure, in stages (issue 17):
 //! the reduced parity space, then either the white-noise tests rebuilt
 //! ([`build_stage`]) or the multi-scale tests' learning carried into the
-//! new space, one stage per step, instead of all in the step that isolated.
+//! new space (after an isolation judged for re-admission, first copied
+//! into the shadow, `readmit.rs`), one stage per step, instead of all in
+//! the step that isolated.
 //! The tests are idle meanwhile (their window and CUSUMs restart after a
 //! reconfiguration anyway) and fusion goes on; what the stages build is
 //! what the one-shot reconfiguration built, in use at most
