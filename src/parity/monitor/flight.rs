@@ -265,7 +265,12 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let (prev, block) = (self.ms_prev, self.ms_block);
         self.exclude(k);
         self.advance_reconfig(false);
-        if !self.configured() && !matches!(self.reconfig, reconfig::Reconfig::Transform(..)) {
+        if !self.configured()
+            && !matches!(
+                self.reconfig,
+                reconfig::Reconfig::Transform(..) | reconfig::Reconfig::Shadow(_)
+            )
+        {
             return;
         }
         self.ms_prev = prev;

@@ -89,6 +89,12 @@ pub(super) struct Readmission<T: Real, const N: usize, const W: usize> {
     space: ParitySpace<T, N>,
     /// Its tests (alarms act only on the probation).
     ms: Multiscale<T, N, W>,
+    /// The monitor's learning is still to be copied into `ms`: at the
+    /// reconfiguration stage after the reduced space (`Reconfig::Shadow`),
+    /// not in the isolating step (≈ 3.5 KB with nine sensors, which took
+    /// that step over its budget). Until the learning is carried into the
+    /// new space nothing else writes it, so the copy is the same.
+    copy: bool,
     /// Block before (`p̄`, `x̄`, per-sensor variance) and the fused mean
     /// before it, in the full space (the centred-difference regressor).
     prev: Option<(SVector<T, N>, Vector3<T>, SVector<T, N>)>,
@@ -110,6 +116,7 @@ impl<T: Real, const N: usize, const W: usize> Readmission<T, N, W> {
             sensor: None,
             space,
             ms: Multiscale::new(cfg, space.dim(), [T::one(); SCALES]),
+            copy: false,
             prev: None,
             prev2: None,
             gap: false,
@@ -123,13 +130,24 @@ impl<T: Real, const N: usize, const W: usize> Readmission<T, N, W> {
     pub(super) fn sensor(&self) -> Option<usize> {
         self.sensor
     }
+
+    /// The monitor's learning is still to be copied into the shadow.
+    pub(super) fn copy_pending(&self) -> bool {
+        self.copy
+    }
 }
 
 impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// Called before sensor `k` is excluded by the multi-scale tests: keeps
     /// the full set's tests to judge it (unless it reached
     /// [`MAX_ISOLATIONS`]). Another sensor judged meanwhile stays out.
+    /// What the isolation's reconfiguration resets (the space, the blocks
+    /// before) is kept now; the learning is copied at the reconfiguration
+    /// stage after the reduced space ([`copy_shadow`](Self::copy_shadow)).
     pub(super) fn start_shadow(&mut self, k: usize) {
+        // A reconfiguration still in progress ends first: its own copy
+        // stage must not take this isolation's.
+        self.advance_reconfig(true);
         self.drop_shadow();
         let Some(count) = self.readmission.isolations.get_mut(k) else {
             return;
@@ -143,8 +161,8 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         if count >= MAX_ISOLATIONS {
             return;
         }
-        r.ms.copy_learning_from(ms);
-        r.needed = (2 * u32::from(r.ms.longest())) << count.saturating_sub(1);
+        r.copy = true;
+        r.needed = (2 * u32::from(ms.longest())) << count.saturating_sub(1);
         r.sensor = Some(k);
         r.space = self.space;
         r.prev = self.ms_prev;
@@ -153,8 +171,24 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         r.quiet = 0;
     }
 
+    /// The monitor's learning into the shadow, if still to be copied: a
+    /// reconfiguration stage of its own, before the learning is carried
+    /// into the reduced space. Out of line: inlined into the
+    /// reconfiguration stages, it cost each of them ≈ 60 instructions.
+    #[inline(never)]
+    pub(super) fn copy_shadow(&mut self) {
+        let r = &mut self.readmission;
+        if !core::mem::take(&mut r.copy) || r.sensor.is_none() {
+            return;
+        }
+        if let Some(ms) = self.ms.as_ref() {
+            r.ms.copy_learning_from(ms);
+        }
+    }
+
     /// Ends the judging of the sensor under probation (it stays isolated).
     pub(super) fn drop_shadow(&mut self) {
+        self.readmission.copy = false;
         if let Some(k) = self.readmission.sensor.take() {
             if let Some(h) = self.health.get_mut(k) {
                 h.set_probation(false);
@@ -176,6 +210,9 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             self.readmission.sensor = None;
             return;
         }
+        // A block closed before the copy stage (it runs first, then the
+        // learning is carried: the copy is still the isolation's).
+        self.copy_shadow();
         let r = &mut self.readmission;
         if r.ms.pending().is_some() {
             let o = r.ms.finish(r.space.v(), r.space.active());
@@ -222,7 +259,9 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             _ => self.readmission.gap = true,
         }
         let r = &mut self.readmission;
-        if r.ms.pending().is_some() {
+        // Before the copy the shadow's tests are stale; the copy has
+        // nothing in work.
+        if !r.copy && r.ms.pending().is_some() {
             let o = r.ms.advance(r.space.v(), r.space.active());
             self.shadow_outcome(o);
         }

@@ -1,7 +1,9 @@
 //! Reconfiguration after an isolation or a failure, in stages (issue 17):
 //! the reduced parity space, then either the white-noise tests rebuilt
 //! ([`build_stage`]) or the multi-scale tests' learning carried into the
-//! new space, one stage per step, instead of all in the step that isolated.
+//! new space (after an isolation judged for re-admission, first copied
+//! into the shadow, `readmit.rs`), one stage per step, instead of all in
+//! the step that isolated.
 //! The tests are idle meanwhile (their window and CUSUMs restart after a
 //! reconfiguration anyway) and fusion goes on; what the stages build is
 //! what the one-shot reconfiguration built, in use at most
@@ -25,7 +27,8 @@ use super::{ParityMonitor, ParityPhase};
 /// Steps a reconfiguration takes at most with `N` sensors.
 pub const fn reconfig_steps(n: usize) -> usize {
     let white = 1 + build_stages(n);
-    let multiscale = 1 + TRANSFORM_PARTS;
+    // The space, the re-admission shadow's copy, the transform.
+    let multiscale = 2 + TRANSFORM_PARTS;
     if white > multiscale {
         white
     } else {
@@ -45,6 +48,10 @@ pub(super) enum Reconfig<T: Real, const N: usize> {
     /// `.2` the first build, at the end of training (samples go on into
     /// blocks; calibration or monitoring starts once built).
     Tests(usize, Newton, bool),
+    /// Multi-scale tests, after an isolation to be judged for re-admission:
+    /// the learning copied into the shadow (`readmit.rs`) before it is
+    /// carried (`.0`: the old space's `V`, for `Transform` part 0).
+    Shadow(SMatrix<T, N, N>),
     /// Multi-scale tests: part `.1` of carrying the learning through the
     /// transition `.0` (`p_new = c p`; in part 0 still the old space's `V`,
     /// from which the transition is formed).
@@ -63,19 +70,23 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let i = match self.reconfig {
             Reconfig::Idle | Reconfig::Space(_) => 0,
             Reconfig::Tests(stage, ..) => 1 + stage,
-            Reconfig::Transform(_, part) => 1 + part,
+            Reconfig::Shadow(_) => 1,
+            Reconfig::Transform(_, part) => 2 + part,
         };
         u8::try_from(i).unwrap_or(u8::MAX)
     }
 
     /// Samples go into the tests on this step: no reconfiguration in
-    /// progress, or only the multi-scale learning being carried (the
+    /// progress, or only the multi-scale learning being copied or carried (the
     /// samples accumulate in the new space meanwhile; a block closing
     /// finishes the carrying first).
     pub(super) fn accepts_samples(&self) -> bool {
         matches!(
             self.reconfig,
-            Reconfig::Idle | Reconfig::Transform(..) | Reconfig::Tests(_, _, true)
+            Reconfig::Idle
+                | Reconfig::Shadow(_)
+                | Reconfig::Transform(..)
+                | Reconfig::Tests(_, _, true)
         )
     }
 
@@ -106,6 +117,10 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                 Reconfig::Tests(stage, newton, lead_in) => {
                     self.reconfig = Reconfig::Idle;
                     self.tests_stage(stage, newton, lead_in);
+                }
+                Reconfig::Shadow(m) => {
+                    self.reconfig = Reconfig::Transform(m, 0);
+                    self.copy_shadow();
                 }
                 Reconfig::Transform(m, part) => {
                     self.reconfig = Reconfig::Idle;
@@ -188,7 +203,12 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         if let Some(ms) = self.ms.as_mut() {
             if self.ms_trained {
                 ms.cancel();
-                self.reconfig = Reconfig::Transform(*self.space.v(), 0);
+                let v = *self.space.v();
+                self.reconfig = if self.readmission.copy_pending() {
+                    Reconfig::Shadow(v)
+                } else {
+                    Reconfig::Transform(v, 0)
+                };
             } else {
                 // Failed while training: train the reduced set.
                 *ms = Multiscale::new(self.cfg.multiscale, sub.dim(), ms.threshold_set());
