@@ -17,6 +17,7 @@ pub mod parity_tables;
 pub mod replay;
 pub mod replay_monitor;
 mod replay_options;
+mod replay_read;
 mod replay_sim;
 mod replay_summary;
 pub mod stats_ci;

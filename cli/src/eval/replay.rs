@@ -1,6 +1,5 @@
 //! SPEC §10 replay: CSV in (IMU + aiding, optional truth), CSV and JSON out.
 
-use std::collections::HashMap;
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
@@ -8,6 +7,7 @@ use imu_fdi::model::{AidingKind, ImuVec, MeasVec, Measurement, CHANNEL_NAMES};
 use imu_fdi::monitor::{Phase, UkfMonitorConfig};
 
 use super::replay_monitor::{phase_name, MonitorKind, ReplayMonitor};
+use super::replay_read::{read_log, Log, Row};
 
 pub use super::replay_sim::write_simulated;
 pub use super::replay_summary::{ChannelSummary, ReplaySummary};
@@ -19,29 +19,7 @@ pub(crate) const DVL_COLS: [&str; 3] = ["dvl_u", "dvl_v", "dvl_w"];
 pub(crate) const GNSS_COLS: [&str; 3] = ["gnss_vn", "gnss_ve", "gnss_vd"];
 pub(crate) const ATT_COLS: [&str; 3] = ["att_roll", "att_pitch", "att_yaw"];
 
-fn parse_opt(rec: &csv::StringRecord, idx: Option<usize>) -> Option<f64> {
-    let s = rec.get(idx?)?.trim();
-    if s.is_empty() {
-        return None;
-    }
-    s.parse::<f64>().ok()
-}
-
 pub use super::replay_options::{flight_config, AidingDelay, Profile, ReplayOptions};
-
-/// One input row.
-struct Row {
-    t: f64,
-    imus: Vec<[f64; 6]>,
-    z: [f64; 6],
-    avail: [bool; 6],
-    /// Per IMU: the fault truth, if the file (or the injection) has it.
-    truth: Vec<Option<[f64; 6]>>,
-}
-
-fn imu_cols(k: usize) -> [String; 6] {
-    ["ax", "ay", "az", "gx", "gy", "gz"].map(|c| format!("imu{k}_{c}"))
-}
 
 fn channel_name(k: usize, c: &str) -> String {
     if k == 0 {
@@ -77,159 +55,25 @@ pub fn replay_observed(
     opts: &ReplayOptions,
     observe: &mut dyn FnMut(f64, &[ReplayReport]),
 ) -> Result<ReplaySummary> {
-    let (mut rdr, headers) = crate::io::log_import::open_csv(input)?;
-    let col: HashMap<&str, usize> = headers.iter().enumerate().map(|(i, h)| (h, i)).collect();
-    let find = |name: &str| col.get(name).copied();
-    let t_idx = find("t").with_context(|| format!("{}: missing column 't'", input.display()))?;
-    let imu_idx: Vec<Vec<usize>> = (0..)
-        .map_while(|k| {
-            imu_cols(k)
-                .iter()
-                .map(|c| find(c))
-                .collect::<Option<Vec<_>>>()
-        })
-        .collect();
-    if imu_idx.is_empty() {
-        let missing = IMU_COLS
-            .iter()
-            .find(|c| find(c).is_none())
-            .unwrap_or(&"imu0_ax");
-        bail!("{}: missing column '{missing}'", input.display());
-    }
-    let has_dvl = DVL_COLS.iter().any(|c| find(c).is_some());
-    let has_gnss = GNSS_COLS.iter().any(|c| find(c).is_some());
-    let (kind, vel_cols) = match (has_dvl, has_gnss) {
-        (true, false) | (false, false) => (AidingKind::DvlCompass, DVL_COLS),
-        (false, true) => (AidingKind::GnssAttitude, GNSS_COLS),
-        (true, true) => bail!(
-            "{}: both dvl_* and gnss_* columns; give one aiding source",
-            input.display()
-        ),
-    };
-    let vel_idx: Vec<Option<usize>> = vel_cols.iter().map(|c| find(c)).collect();
-    let att_idx: Vec<Option<usize>> = ATT_COLS.iter().map(|c| find(c)).collect();
-    let truth_idx: Vec<Option<Vec<usize>>> = (0..imu_idx.len())
-        .map(|k| {
-            CHANNEL_NAMES
-                .iter()
-                .map(|c| find(&format!("fault_imu{k}_{c}")))
-                .collect::<Option<Vec<_>>>()
-        })
-        .collect();
-    let file_truth = truth_idx.iter().any(Option::is_some);
-
     let mut sum = ReplaySummary {
         monitor: opts.monitor,
-        aiding: format!("{kind:?}"),
         ..Default::default()
     };
-    // --- read ---------------------------------------------------------------
-    use crate::io::csv_checks::{check_imu_value, check_times, parse_cell, ColumnData};
-    let imu_names: Vec<[String; 6]> = (0..imu_idx.len()).map(imu_cols).collect();
-    let mut data = ColumnData::new(imu_names.iter().flatten().cloned().collect());
-    let mut times = Vec::new();
-    let mut rows: Vec<Row> = Vec::new();
-    let mut last_t: Option<f64> = None;
-    let mut csv_rows = crate::io::log_import::CsvRows::new(&mut rdr, input, headers.len());
-    for row in csv_rows.by_ref() {
-        let (line, rec) = row?;
-        sum.rows += 1;
-        let t = parse_cell(input, line, "t", rec.get(t_idx))?;
-        for (k, idx) in imu_idx.iter().enumerate() {
-            for (ch, i) in idx.iter().enumerate() {
-                let name = &imu_names[k][ch];
-                let x = parse_cell(input, line, name, rec.get(*i))?;
-                check_imu_value(input, line, name, ch, x)?;
-                data.see(6 * k + ch, x);
-            }
-        }
-        // Aiding cells: empty or NaN is "no sample"; text is an error.
-        for (name, idx) in vel_cols
-            .iter()
-            .chain(ATT_COLS.iter())
-            .zip(vel_idx.iter().chain(att_idx.iter()))
-        {
-            if let Some(idx) = idx {
-                parse_cell(input, line, name, rec.get(*idx))?;
-            }
-        }
-        let Some(t) = Some(t).filter(|t| t.is_finite()) else {
-            sum.skipped_rows += 1;
-            continue;
-        };
-        times.push((line, t));
-        if last_t.is_some_and(|lt| t <= lt) {
-            sum.skipped_rows += 1;
-            continue;
-        }
-        last_t = Some(t);
-        if opts.from_s.is_some_and(|f| t < f) || opts.to_s.is_some_and(|e| t > e) {
-            continue;
-        }
-        let imus = imu_idx
-            .iter()
-            .map(|idx| {
-                core::array::from_fn(|i| parse_opt(&rec, idx.get(i).copied()).unwrap_or(f64::NAN))
-            })
-            .collect();
-        let mut z = [0.0; 6];
-        let mut avail = [false; 6];
-        for (i, idx) in vel_idx.iter().chain(att_idx.iter()).enumerate() {
-            if let (Some(v), Some(zi), Some(ai)) =
-                (parse_opt(&rec, *idx), z.get_mut(i), avail.get_mut(i))
-            {
-                *zi = v;
-                *ai = true;
-            }
-        }
-        let truth = truth_idx
-            .iter()
-            .map(|idx| {
-                idx.as_ref().map(|idx| {
-                    core::array::from_fn(|i| parse_opt(&rec, idx.get(i).copied()).unwrap_or(0.0))
-                })
-            })
-            .collect();
-        rows.push(Row {
-            t,
-            imus,
-            z,
-            avail,
-            truth,
-        });
-    }
-    sum.ended_early = csv_rows.cut_tail.take();
-    check_times(input, "t", &times)?;
-    if rows.len() < 10 {
-        bail!(
-            "{}: fewer than 10 usable rows{}",
-            input.display(),
-            opts.from_s
-                .map_or(String::new(), |f| format!(" after {f} s"))
-        );
-    }
-    data.check(input)?;
-    if !rows.iter().any(|r| r.avail.iter().any(|a| *a)) {
-        bail!(
-            "{}: no aiding in the file (every dvl_*, gnss_* and att_* cell empty or absent): \
-             the UKF monitor needs a velocity or attitude reference to compare the IMU with; \
-             redundant IMUs without one go to `parity-replay`",
-            input.display()
-        );
-    }
-    // The monitor's period is the log's median step, not an assumption.
-    let mut dts: Vec<f64> = rows.windows(2).map(|w| w[1].t - w[0].t).collect();
-    dts.sort_by(f64::total_cmp);
-    let dt = dts.get(dts.len() / 2).copied().unwrap_or(0.01);
-    sum.imu_rate_hz = 1.0 / dt;
+    let Log {
+        kind,
+        imus,
+        file_truth,
+        mut rows,
+        dt,
+    } = read_log(input, opts, &mut sum)?;
 
     // --- inject -------------------------------------------------------------
     if let Some((table, k)) = &opts.inject {
-        if *k >= imu_idx.len() {
+        if *k >= imus {
             bail!(
                 "{}: cannot inject on IMU {k}: the file has {} IMU(s)",
                 input.display(),
-                imu_idx.len()
+                imus
             );
         }
         let sigma =
@@ -286,7 +130,7 @@ pub fn replay_observed(
             (0.5 / dt).round() as usize,
         ))
     };
-    for k in 0..imu_idx.len() {
+    for k in 0..imus {
         let lag = match opts.velocity_delay {
             AidingDelay::Fixed(d) => (d / dt).round().max(0.0) as usize,
             AidingDelay::Auto => {
@@ -372,13 +216,13 @@ pub fn replay_observed(
             otsukf_lag_s.unwrap_or(0.0),
         )?);
     }
-    let has_truth: Vec<bool> = (0..imu_idx.len())
+    let has_truth: Vec<bool> = (0..imus)
         .map(|k| {
             rows.iter()
                 .any(|r| r.truth.get(k).is_some_and(Option::is_some))
         })
         .collect();
-    sum.channels = (0..imu_idx.len())
+    sum.channels = (0..imus)
         .flat_map(|k| {
             let ht = has_truth.get(k).copied().unwrap_or(false);
             CHANNEL_NAMES.iter().map(move |c| ChannelSummary {
@@ -407,7 +251,7 @@ pub fn replay_observed(
         // One layout for both monitors: `fsig_*` (the fault estimate's σ)
         // is empty where the monitor does not estimate it (UKF monitor),
         // `ratio_*` (the block tests' ratios) where it has no block test.
-        for k in 0..imu_idx.len() {
+        for k in 0..imus {
             h.push(channel_name(k, "phase"));
             for prefix in ["flag", "fhat", "fsig", "ratio"] {
                 for c in CHANNEL_NAMES {
@@ -417,7 +261,7 @@ pub fn replay_observed(
         }
         w.write_record(&h)?;
     }
-    let mut last_fault_t = vec![f64::NEG_INFINITY; imu_idx.len()];
+    let mut last_fault_t = vec![f64::NEG_INFINITY; imus];
     let mut prev_t: Option<f64> = None;
     for (row_index, row) in rows.iter().enumerate() {
         let row_is_last = row_index + 1 == rows.len();
@@ -591,7 +435,7 @@ pub fn replay_observed(
             }
         }
     }
-    sum.imus = imu_idx.len();
+    sum.imus = imus;
     if opts.monitor == MonitorKind::Ukf {
         sum.aiding_delay_mode = Some(match opts.aiding_delay {
             AidingDelay::Fixed(_) => "fixed".into(),
