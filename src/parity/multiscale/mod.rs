@@ -57,6 +57,7 @@ mod scale;
 mod staged;
 mod training;
 
+use carry::CalSnap;
 pub use config::MultiscaleConfig;
 use lin::{backward_d, best_two, dot, factor_lower, forward_d, CachedFactor};
 use scale::VibrationScale;
@@ -181,12 +182,6 @@ pub struct Multiscale<T: Real, const N: usize, const W: usize> {
     /// Decisions since the newest snapshot.
     since_snap: u16,
 }
-
-/// A calibration kept for re-admission.
-type CalSnap<T, const N: usize> = (
-    SMatrix<T, REGRESSORS, REGRESSORS>,
-    SMatrix<T, N, REGRESSORS>,
-);
 
 impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// The threshold of each window length: the squared Student-t
