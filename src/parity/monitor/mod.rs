@@ -181,7 +181,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// A monitor of the array `geometry`. Errors: rank-deficient geometry,
     /// fewer than four sensors, a window longer than `W` or zero, a bad
     /// false-alarm probability.
-    // Out of line: its temporaries (two `Multiscale` of ≈ 15 KB for nine
+    // Out of line: its temporaries (two `Multiscale` of ≈ 19 KB for nine
     // sensors, the report) then live in its own frame, not in the caller's
     // for as long as the caller runs.
     #[inline(never)]
@@ -234,7 +234,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         // The multi-scale tests when they are the detector (their
         // thresholds are computed here, once). The monitor is built in the
         // return value, not moved through a builder: each move is a copy
-        // of the whole monitor on the stack (≈ 38 KB for nine sensors).
+        // of the whole monitor on the stack (≈ 44 KB for nine sensors).
         let ms = match cfg.detector {
             ParityDetector::Multiscale => {
                 let h = Multiscale::<T, N, W>::thresholds(&cfg.multiscale)

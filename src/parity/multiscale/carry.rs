@@ -51,8 +51,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// This space's tests with `src`'s learning (calibration, covariances,
     /// vibration law, thresholds and counters) and an empty window, no
     /// block in work. Only the learned state is copied (≈ 3.5 KB for nine
-    /// sensors, not the ≈ 15 KB with the ring: the copy is made in the
-    /// step that isolates, the longest of the flight).
+    /// sensors, not the ≈ 19 KB with the ring: the copy is a step of its
+    /// own, `Reconfig::Shadow`, after the isolating one).
     pub fn copy_learning_from(&mut self, src: &Self) {
         self.cfg = src.cfg;
         self.dim = src.dim;

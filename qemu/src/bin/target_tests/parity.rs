@@ -91,7 +91,7 @@ fn print_stages(r: &ParityRun) {
 
 /// Runs `sim` through a monitor of `g` and `cfg`, timing every step.
 // Out of line, each test its own frame: inlined into `main`, the two
-// monitors (the flight one ≈ 38 KB with the re-admission shadow) and their
+// monitors (the flight one ≈ 44 KB with the re-admission shadow) and their
 // copies shared one frame beyond the 128 KB RAM.
 #[inline(never)]
 fn run<const N: usize, const W: usize>(
