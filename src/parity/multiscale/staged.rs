@@ -216,9 +216,16 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
                 if let Some(slot) = self.norms.get_mut(newest) {
                     *slot = norm2;
                 }
-                if let Some(slot) = self.decided_means.get_mut(newest) {
-                    for (d, m) in slot.iter_mut().zip(self.work.means.iter()) {
-                        *d = m.map(|(rbar, _, _)| rbar);
+                if let (Some(slot), Some(set)) = (
+                    self.decided_means.get_mut(newest),
+                    self.decided_set.get_mut(newest),
+                ) {
+                    *set = 0;
+                    for (s, (d, m)) in slot.iter_mut().zip(self.work.means.iter()).enumerate() {
+                        if let Some((rbar, _, _)) = m {
+                            *d = *rbar;
+                            *set |= 1 << s;
+                        }
                     }
                 }
                 self.work.norm2 = norm2;
@@ -456,12 +463,13 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         }
         // After `push`, `head` is the oldest block's slot.
         let i = self.head;
-        let (Some(r), Some(gain), Some(level), Some(norm2), Some(means)) = (
+        let (Some(r), Some(gain), Some(level), Some(norm2), Some(means), Some(set)) = (
             self.residuals.get(i).copied(),
             self.gains.get(i).copied(),
             self.levels.get(i).copied(),
             self.norms.get(i).copied(),
             self.decided_means.get(i).copied(),
+            self.decided_set.get(i).copied(),
         ) else {
             return;
         };
@@ -474,8 +482,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         let dimf = T::lit(self.dim.max(1) as f64);
         let energy = T::one() / (gain * gain).max(T::lit(1e-12));
         self.scale.learn(level, energy * norm2 / dimf, wt);
-        for (cov, m) in self.window_cov.iter_mut().zip(means.iter()) {
-            if let Some(rbar) = m {
+        for (s, (cov, rbar)) in self.window_cov.iter_mut().zip(means.iter()).enumerate() {
+            if set & (1 << s) != 0 {
                 ewma_outer_padded(cov, rbar, wt, self.dim);
             }
         }

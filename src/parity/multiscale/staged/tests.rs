@@ -82,7 +82,8 @@ fn the_kept_covariance_factors_are_those_of_the_current_matrices() {
     for i in 0..40 {
         let (p, phi) = block(i);
         ms.push(&p, &p, &phi, 1.0, 0.0);
-        ms.decided_means[i] = [Some(p * 3.0); SCALES];
+        ms.decided_means[i] = [p * 3.0; SCALES];
+        ms.decided_set[i] = 0b111;
         ms.norms[i] = 2.0;
     }
     ms.quiet_blocks = 40;
