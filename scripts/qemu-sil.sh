@@ -27,7 +27,8 @@ echo "note: both SIL images also carry hal-sim's f64 vehicle/sensor simulation (
 
 # The budget figures as one line of JSON (issue 17): instructions per step
 # (UKF monitor: the S2 SIL image; two-stage monitor and parity: the on-target
-# tests), peak stack of the S2 SIL image and of its monitor steps alone
+# tests; parity_readmit_step: the step that re-admits a sensor isolated by a
+# 1-s glitch, parity_readmit_flight_step_max: that flight's largest step), peak stack of the S2 SIL image and of its monitor steps alone
 # (the deepest write below the caller's frame), flash of the firmware, of the
 # SIL image and of the imu_fdi code inside the firmware (sum of the sizes of
 # its `imu_fdi::` symbols, from arm-none-eabi-nm); and the kfilter 0.5 UKF's
@@ -53,7 +54,7 @@ kf=$(field "$tt" '^kfilter 0.5 UKF.*predict\+update mean ([0-9]+) instructions.*
 ours=$(field "$tt" '^kfilter 0.5 UKF.*imu-fdi Ukf predict_split\+update mean ([0-9]+).*')
 ukf_mean=$(field "$sm" '^instructions per step: mean ([0-9]+) max [0-9]+.*')
 imu_fdi_bytes=$(arm-none-eabi-nm --size-sort -C -S --radix=d "$fw" | awk '$3 ~ /^[tTrR]$/ && /imu_fdi::/ { s += $2 } END { print s + 0 }')
-printf '{"ukf_step_mean":%s,"ukf_step_max":%s,"otsukf_step_mean":%s,"otsukf_step_max":%s,"parity_step_mean":%s,"parity_step_max":%s,"parity_config":%s,"parity_flight_step_mean":%s,"parity_flight_step_max":%s,"parity_flight_config":%s,"stack_peak_bytes":%s,"monitor_stack_bytes":%s,"firmware_flash_bytes":%s,"sil_flash_bytes":%s,"imu_fdi_flash_bytes":%s,"kfilter_step_mean":%s,"ukf_filter_step_mean":%s,"kfilter_ratio":%s,"kfilter_filter_ratio":%s}\n' \
+printf '{"ukf_step_mean":%s,"ukf_step_max":%s,"otsukf_step_mean":%s,"otsukf_step_max":%s,"parity_step_mean":%s,"parity_step_max":%s,"parity_config":%s,"parity_flight_step_mean":%s,"parity_flight_step_max":%s,"parity_flight_config":%s,"parity_readmit_step":%s,"parity_readmit_flight_step_max":%s,"stack_peak_bytes":%s,"monitor_stack_bytes":%s,"firmware_flash_bytes":%s,"sil_flash_bytes":%s,"imu_fdi_flash_bytes":%s,"kfilter_step_mean":%s,"ukf_filter_step_mean":%s,"kfilter_ratio":%s,"kfilter_filter_ratio":%s}\n' \
   "$ukf_mean" \
   "$(field "$sm" '^instructions per step: mean [0-9]+ max ([0-9]+).*')" \
   "$(field "$tt" '^two-stage UKF monitor .*mean ([0-9]+) max [0-9]+ instructions.*')" \
@@ -64,6 +65,8 @@ printf '{"ukf_step_mean":%s,"ukf_step_max":%s,"otsukf_step_mean":%s,"otsukf_step
   "$(field "$tt" '^parity monitor for real flights .*per step mean ([0-9]+) max [0-9]+.*')" \
   "$(field "$tt" '^parity monitor for real flights .*per step mean [0-9]+ max ([0-9]+).*')" \
   "$(field "$tt" '^parity monitor for real flights .*configuration ([0-9]+) instructions.*')" \
+  "$(field "$tt" '^parity monitor re-admission .*re-admitting step ([0-9]+) instructions.*')" \
+  "$(field "$tt" '^parity monitor re-admission .*largest step ([0-9]+) instructions.*')" \
   "$(field "$sm" '^peak stack: ([0-9]+) bytes.*')" \
   "$(field "$sm" '^monitor step stack: ([0-9]+) bytes.*')" \
   "$(flash "$fw")" \

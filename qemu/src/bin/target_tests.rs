@@ -25,7 +25,7 @@ use imu_fdi_qemu::instructions;
 // The parity monitors' tests (a directory without `main.rs`: no extra bin).
 #[path = "target_tests/parity.rs"]
 mod parity;
-use parity::{parity_flight_on_target, parity_s4_on_target};
+use parity::{parity_flight_on_target, parity_readmit_on_target, parity_s4_on_target};
 
 const EXPECTATIONS: &str = include_str!("../../../tests/data/target_expectations.txt");
 
@@ -270,6 +270,7 @@ fn main() -> ! {
     r.check("otsukf_s3_matches_f64", otsukf_s3_matches_f64());
     r.check("parity_s4_on_target", parity_s4_on_target());
     r.check("parity_flight_on_target", parity_flight_on_target());
+    r.check("parity_readmit_on_target", parity_readmit_on_target());
     r.check("fifo_integration_on_target", fifo_integration_on_target());
     profile();
     match imu_fdi_qemu::kfilter_cmp::predict_update_costs(50) {

@@ -107,8 +107,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         // A reconfiguration still carrying the learning ends first.
         self.advance_reconfig(true);
         // Blocks shorter than the stages: the work in progress ends now.
-        if self.ms.as_ref().is_some_and(|ms| ms.pending().is_some())
-            && self.multiscale_advance(true)
+        if self.ms.live().is_some_and(|ms| ms.pending().is_some()) && self.multiscale_advance(true)
         {
             // It reconfigured: this block is from the old space.
             return;
@@ -133,7 +132,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     ) {
         let train_blocks = (self.cfg.train_samples / u32::from(self.cfg.block_len.max(1))).max(12);
         let active = *self.space.active();
-        let Some(ms) = self.ms.as_mut() else {
+        let Some(ms) = self.ms.live_mut() else {
             return;
         };
         // Sensors out of the set may read anything: no vibration regressor.
@@ -171,7 +170,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// instructions per sample on the M4F, issue 14).
     #[inline]
     pub(super) fn multiscale_advance(&mut self, to_end: bool) -> bool {
-        if !self.configured() || self.ms.as_ref().is_none_or(|ms| ms.pending().is_none()) {
+        if !self.configured() || self.ms.live().is_none_or(|ms| ms.pending().is_none()) {
             return false;
         }
         self.run_multiscale_stage(to_end)
@@ -181,7 +180,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     #[inline(never)]
     fn run_multiscale_stage(&mut self, to_end: bool) -> bool {
         let cfg = self.cfg.multiscale;
-        let Some(ms) = self.ms.as_mut() else {
+        let Some(ms) = self.ms.live_mut() else {
             return false;
         };
         let (v, active) = (self.space.v(), self.space.active());
@@ -293,6 +292,6 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         if !self.configured() {
             return Some(BlockStage::Reconfigure(self.reconfig_stage()));
         }
-        self.ms.as_ref().and_then(|ms| ms.pending())
+        self.ms.live().and_then(|ms| ms.pending())
     }
 }

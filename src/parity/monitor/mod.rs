@@ -9,7 +9,7 @@ use crate::stats::chi_square_upper_quantile;
 
 use super::config::{ParityConfig, ParityDetector};
 use super::health::{Reading, SensorHealth, SensorStatus};
-use super::multiscale::{Multiscale, MultiscaleDecision};
+use super::multiscale::{Multiscale, MultiscaleDecision, SCALES};
 use super::training::{Baseline, Trainer};
 use super::{ConfigError, Geometry, ParitySpace};
 pub use reconfig::reconfig_steps;
@@ -20,6 +20,7 @@ mod flight;
 mod fusion;
 mod readmit;
 mod reconfig;
+mod slots;
 mod white;
 
 use flight::BlockSums;
@@ -27,6 +28,7 @@ use fusion::{fuse_subset, FusionCache};
 use readmit::Readmission;
 pub use readmit::MAX_ISOLATIONS;
 use reconfig::Reconfig;
+use slots::TestSlots;
 use white::Tests;
 
 /// Monitor phase.
@@ -141,8 +143,9 @@ pub struct ParityMonitor<T: Real, const N: usize, const W: usize> {
     /// copy and its write-back cost two 124-byte copies per sample on the
     /// M4F); `step_ref` returns a reference to it.
     last: ParityReport<T, N>,
-    /// Multi-scale tests (with [`ParityDetector::Multiscale`]).
-    ms: Option<Multiscale<T, N, W>>,
+    /// Multi-scale tests (with [`ParityDetector::Multiscale`]) and the
+    /// storage of the re-admission shadow's (`readmit.rs`, `slots.rs`).
+    ms: TestSlots<T, N, W>,
     /// Block being accumulated for them.
     ms_block: BlockSums<T, N>,
     /// The previous block (`p̄`, `x̄`, per-sensor variance) and the fused
@@ -171,14 +174,14 @@ pub struct ParityMonitor<T: Real, const N: usize, const W: usize> {
     fusion: Option<FusionCache<T, N>>,
     /// A sensor isolated by the multi-scale tests, judged for re-admission
     /// by the full set's frozen tests (`readmit.rs`).
-    readmission: Readmission<T, N, W>,
+    readmission: Readmission<T, N>,
 }
 
 impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// A monitor of the array `geometry`. Errors: rank-deficient geometry,
     /// fewer than four sensors, a window longer than `W` or zero, a bad
     /// false-alarm probability.
-    // Out of line: its temporaries (two `Multiscale` of ≈ 15 KB for nine
+    // Out of line: its temporaries (two `Multiscale` of ≈ 19 KB for nine
     // sensors, the report) then live in its own frame, not in the caller's
     // for as long as the caller runs.
     #[inline(never)]
@@ -231,7 +234,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         // The multi-scale tests when they are the detector (their
         // thresholds are computed here, once). The monitor is built in the
         // return value, not moved through a builder: each move is a copy
-        // of the whole monitor on the stack (≈ 38 KB for nine sensors).
+        // of the whole monitor on the stack (≈ 44 KB for nine sensors).
         let ms = match cfg.detector {
             ParityDetector::Multiscale => {
                 let h = Multiscale::<T, N, W>::thresholds(&cfg.multiscale)
@@ -262,7 +265,12 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             calibrated: 0,
             chi2,
             last: report,
-            ms,
+            // The shadow's thresholds come with the learning it is given.
+            ms: TestSlots {
+                a: ms,
+                b: Multiscale::new(cfg.multiscale, space.dim(), [T::one(); SCALES]),
+                b_live: false,
+            },
             ms_block: BlockSums::default(),
             ms_prev: None,
             ms_hold: 0,
@@ -273,7 +281,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             reconfig: Reconfig::Idle,
             held: None,
             fusion: None,
-            readmission: Readmission::new(space, cfg.multiscale),
+            readmission: Readmission::new(space),
         })
     }
 
@@ -545,7 +553,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         self.ms_prev2 = None;
         self.ms_hold = 0;
         self.ms_above = 0;
-        if let Some(ms) = self.ms.as_mut() {
+        if let Some(ms) = self.ms.live_mut() {
             // The block in work belongs to the old space.
             ms.cancel();
         }
@@ -573,7 +581,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         // No parity space is left; fusion uses the health masks.
         self.drop_shadow();
         self.tests = None;
-        self.ms = None;
+        self.ms.clear();
         None
     }
 }

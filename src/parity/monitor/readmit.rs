@@ -65,7 +65,7 @@ use nalgebra::{SVector, Vector3};
 
 use crate::math::Real;
 
-use super::super::multiscale::{Multiscale, MultiscaleConfig, Outcome, REGRESSORS, SCALES};
+use super::super::multiscale::{Outcome, REGRESSORS};
 use super::super::{ParitySpace, SensorHealth};
 use super::flight::BlockSums;
 use super::{ParityMonitor, Reconfig};
@@ -77,19 +77,19 @@ pub const MAX_ISOLATIONS: u8 = 3;
 /// Re-admission state of the monitor: the full set's tests kept at an
 /// isolation (the shadow), judging the isolated sensor.
 ///
-/// The shadow's storage is always there and written in place (the
-/// monitor's learning copied into it at the isolation, swapped with the
-/// monitor's tests at the re-admission): a `Multiscale` moved through an
-/// `Option` on the stack is ≈ 15 KB per copy on the M4F.
+/// The shadow's tests are the idle slot of the monitor's `TestSlots`,
+/// always there and written in place (the monitor's learning copied into
+/// it at the isolation; made the live slot at the re-admission, nothing
+/// moved): a `Multiscale` moved through an `Option` on the stack is
+/// ≈ 20 KB per copy on the M4F.
 #[derive(Debug, Clone)]
-pub(super) struct Readmission<T: Real, const N: usize, const W: usize> {
+pub(super) struct Readmission<T: Real, const N: usize> {
     /// The sensor judged (`None`: no shadow; the fields below are unused).
     sensor: Option<usize>,
-    /// The full set's parity space.
+    /// The full set's parity space (its tests, the shadow slot, act only
+    /// on the probation).
     space: ParitySpace<T, N>,
-    /// Its tests (alarms act only on the probation).
-    ms: Multiscale<T, N, W>,
-    /// The monitor's learning is still to be copied into `ms`: at the
+    /// The monitor's learning is still to be copied into the shadow: at the
     /// reconfiguration stage after the reduced space (`Reconfig::Shadow`),
     /// not in the isolating step (≈ 3.5 KB with nine sensors, which took
     /// that step over its budget). Until the learning is carried into the
@@ -109,13 +109,12 @@ pub(super) struct Readmission<T: Real, const N: usize, const W: usize> {
     isolations: [u8; N],
 }
 
-impl<T: Real, const N: usize, const W: usize> Readmission<T, N, W> {
-    /// No sensor judged; `space` and `cfg` only size the idle storage.
-    pub(super) fn new(space: ParitySpace<T, N>, cfg: MultiscaleConfig<T>) -> Self {
+impl<T: Real, const N: usize> Readmission<T, N> {
+    /// No sensor judged; `space` only fills the idle storage.
+    pub(super) fn new(space: ParitySpace<T, N>) -> Self {
         Self {
             sensor: None,
             space,
-            ms: Multiscale::new(cfg, space.dim(), [T::one(); SCALES]),
             copy: false,
             prev: None,
             prev2: None,
@@ -155,7 +154,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         *count = count.saturating_add(1);
         let count = *count;
         let r = &mut self.readmission;
-        let Some(ms) = self.ms.as_ref().filter(|_| self.ms_trained) else {
+        let Some(ms) = self.ms.live().filter(|_| self.ms_trained) else {
             return;
         };
         if count >= MAX_ISOLATIONS {
@@ -181,8 +180,8 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         if !core::mem::take(&mut r.copy) || r.sensor.is_none() {
             return;
         }
-        if let Some(ms) = self.ms.as_ref() {
-            r.ms.copy_learning_from(ms);
+        if let Some((ms, shadow)) = self.ms.split_mut() {
+            shadow.copy_learning_from(ms);
         }
     }
 
@@ -213,9 +212,12 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         // A block closed before the copy stage (it runs first, then the
         // learning is carried: the copy is still the isolation's).
         self.copy_shadow();
+        let Some(sh) = self.ms.shadow_mut() else {
+            return;
+        };
         let r = &mut self.readmission;
-        if r.ms.pending().is_some() {
-            let o = r.ms.finish(r.space.v(), r.space.active());
+        if sh.pending().is_some() {
+            let o = sh.finish(r.space.v(), r.space.active());
             self.shadow_outcome(o);
         }
         let r = &mut self.readmission;
@@ -231,11 +233,13 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             return;
         }
         let (p, x) = (r.space.v() * mean, r.space.lsq() * mean);
-        if let (Some((p_prev, x_prev, e_prev)), Some(x_before)) = (r.prev, r.prev2) {
+        if let (Some((p_prev, x_prev, e_prev)), Some(x_before), Some(sh)) =
+            (r.prev, r.prev2, self.ms.shadow_mut())
+        {
             let dx = (x - x_before) * T::lit(0.5);
-            let phi: SVector<T, REGRESSORS> = r.ms.regressor(&x_prev, &dx, &e_prev);
+            let phi: SVector<T, REGRESSORS> = sh.regressor(&x_prev, &dx, &e_prev);
             let level = e_prev.sum().max(T::zero()).sqrt();
-            r.ms.begin(&p_prev, &phi, level, None);
+            sh.begin(&p_prev, &phi, level, None);
         }
         r.prev2 = r.prev.map(|(_, x, _)| x);
         r.prev = Some((p, x, *e));
@@ -261,13 +265,15 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let r = &mut self.readmission;
         // Before the copy the shadow's tests are stale; the copy has
         // nothing in work.
-        if !r.copy && r.ms.pending().is_some() {
-            let o = r.ms.advance(r.space.v(), r.space.active());
-            self.shadow_outcome(o);
+        if let Some(sh) = self.ms.shadow_mut() {
+            if !r.copy && sh.pending().is_some() {
+                let o = sh.advance(r.space.v(), r.space.active());
+                self.shadow_outcome(o);
+            }
         }
         let r = &self.readmission;
         let ready = r.sensor.is_some() && r.quiet >= r.needed;
-        let idle = self.configured() && self.ms.as_ref().is_none_or(|ms| ms.pending().is_none());
+        let idle = self.configured() && self.ms.live().is_none_or(|ms| ms.pending().is_none());
         if ready && idle {
             self.readmit();
         }
@@ -275,6 +281,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
 
     /// Applies a shadow decision to the probation count.
     fn shadow_outcome(&mut self, o: Outcome<T>) {
+        let full = self.ms.shadow().is_some_and(|ms| ms.windows_full());
         let r = &mut self.readmission;
         let Some(k) = r.sensor else {
             return;
@@ -282,7 +289,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let quiet = match o {
             Outcome::Busy | Outcome::Trained(_) => return,
             // Decisions count once every window length has a score.
-            Outcome::Decided(Some(d)) if !r.ms.windows_full() => {
+            Outcome::Decided(Some(d)) if !full => {
                 if d.ratio <= T::one() {
                     return;
                 }
@@ -299,21 +306,22 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     }
 
     /// Puts the judged sensor back into the set with the shadow's tests
-    /// (swapped in place; the reduced set's tests are dropped).
+    /// (their slot made the live one, nothing moved; the reduced set's
+    /// tests are dropped).
     fn readmit(&mut self) {
         let Some(k) = self.readmission.sensor.take() else {
             return;
         };
-        let Some(ms) = self.ms.as_mut() else {
+        if !self.ms.is_some() {
             return;
-        };
+        }
         if !self.health.get_mut(k).is_some_and(|h| h.readmit()) {
             return;
         }
         if let Some(r) = self.removed.get_mut(k) {
             *r = false;
         }
-        core::mem::swap(ms, &mut self.readmission.ms);
+        self.ms.flip();
         self.reconfig = Reconfig::Idle;
         self.space = self.readmission.space;
         self.ms_prev = self.readmission.prev;

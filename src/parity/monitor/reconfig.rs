@@ -146,7 +146,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             *m
         };
         let dim = self.space.dim();
-        if let Some(ms) = self.ms.as_mut() {
+        if let Some(ms) = self.ms.live_mut() {
             ms.transform_part(&c, dim, part);
         }
         if part + 1 < TRANSFORM_PARTS {
@@ -200,7 +200,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let Some(sub) = self.reduced_space(k) else {
             return;
         };
-        if let Some(ms) = self.ms.as_mut() {
+        if let Some(ms) = self.ms.live_mut() {
             if self.ms_trained {
                 ms.cancel();
                 let v = *self.space.v();
@@ -224,7 +224,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                 correlation_factor: t.baseline.correlation_factor,
             };
             self.reconfig = Reconfig::Tests(0, Newton::START, false);
-        } else if self.ms.is_none() {
+        } else if !self.ms.is_some() {
             // Failed during training: start training the reduced set.
             self.trainer = Trainer::new(self.cfg.train_samples, self.cfg.block_len, self.cfg.ridge);
         }
