@@ -115,7 +115,7 @@ enum Cmd {
     /// monitor (`--monitor ukf`: UKF innovation monitor, default detector
     /// run-time matrix + GLR; `--monitor otsukf`: the OTSUKF), one output
     /// format for both.
-    Replay(cmd::replay::Args),
+    Replay(Box<cmd::replay::Args>),
     /// A flight report: any log (.ulg, .bin, SPEC §10 CSV; one or three
     /// IMUs) replayed into one self-contained HTML page that opens offline:
     /// verdict per IMU channel, fault estimates with flags, innovations
@@ -155,7 +155,7 @@ fn run(cmd: Cmd) -> Result<()> {
         Cmd::Sweep(a) => cmd::sweep::run(a),
         Cmd::Detections(a) => cmd::detections::run(a),
         Cmd::Simulate(a) => cmd::simulate::run(a),
-        Cmd::Replay(a) => cmd::replay::run(a),
+        Cmd::Replay(a) => cmd::replay::run(*a),
         Cmd::Report(a) => cmd::report::run(a),
     }
 }

@@ -4,6 +4,10 @@ use crate::math::Real;
 use crate::model::{AidingKind, ImuNoisePsd, ImuVec, MeasVec, StateVec, G0};
 use crate::monitor::{AttitudeRateConfig, ConfigError, VelocityIncrementConfig};
 
+/// Largest nominal bias a learner may assume without a configured turn-on
+/// bound, as a multiple of `min_fault`: anything larger is a fault from
+/// power-on, not a nominal error.
+const MAX_NOMINAL_BIAS_FACTOR: f64 = 20.0;
 /// Everything the UKF monitor is tuned by. Units are SI (m/s², rad/s, m/s,
 /// rad, s); noise densities are PSDs (see [`ImuNoisePsd`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -326,6 +330,15 @@ impl<T: Real> UkfMonitorConfig<T> {
         // 0 false alarms in 10 fault-free hours either way).
         c.persistence = 1;
         c
+    }
+
+    /// Largest nominal bias per channel a monitor's learner may assume:
+    /// [`max_nominal_bias`](Self::max_nominal_bias), else
+    /// `MAX_NOMINAL_BIAS_FACTOR` (20) × `min_fault`. Beyond it a bias is a
+    /// fault present from power-on, not a nominal error (both monitors).
+    pub fn nominal_bias_bound(&self) -> ImuVec<T> {
+        self.max_nominal_bias
+            .unwrap_or_else(|| self.min_fault * T::lit(MAX_NOMINAL_BIAS_FACTOR))
     }
 
     /// Checks every field: what would make the filter or the tests

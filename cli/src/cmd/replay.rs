@@ -121,6 +121,14 @@ pub(crate) struct Args {
     /// leaves the accelerometers to the innovation windows alone.
     #[arg(long, value_enum, default_value_t = OnOff::On)]
     velocity_increment: OnOff,
+    /// Flight profile: the largest nominal bias the monitor may learn, as
+    /// `ACCEL_XY,ACCEL_Z,GYRO` in m/s² and °/s (or `ACCEL,GYRO`) — the
+    /// turn-on bias a calibrated IMU can carry against its aiding. A bias
+    /// beyond it present from power-up is reported as a fault at
+    /// monitoring start instead of absorbed (the simulated profile takes
+    /// 20 × `min_fault`).
+    #[arg(long, value_delimiter = ',', default_value = "1.5,3,5")]
+    turn_on_bias: Vec<f64>,
     #[command(flatten)]
     detect: DetectOpts,
 }
@@ -182,6 +190,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         velocity_lag,
         attitude_rate,
         velocity_increment,
+        turn_on_bias,
         detect,
     } = args;
     let ropts = options("replay", &detect);
@@ -211,6 +220,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
         )),
         None => None,
     };
+    let positive = |v: &[f64]| v.iter().all(|x| x.is_finite() && *x > 0.0);
     let opts = imu_fdi_cli::eval::replay::ReplayOptions {
         grace_s: grace,
         from_s: from,
@@ -230,6 +240,16 @@ pub(crate) fn run(args: Args) -> Result<()> {
         velocity_lag,
         attitude_rate: attitude_rate == OnOff::On,
         velocity_increment: velocity_increment == OnOff::On,
+        turn_on_bias: match turn_on_bias.as_slice() {
+            [a, g] if positive(&[*a, *g]) => [*a, *a, g * deg],
+            [a, z, g] if positive(&[*a, *z, *g]) => [*a, *z, g * deg],
+            _ => {
+                return Err(anyhow!(
+                    "--turn-on-bias takes two or three positive values: \
+                     ACCEL_XY,ACCEL_Z,GYRO (m/s², m/s², °/s) or ACCEL,GYRO"
+                ))
+            }
+        },
     };
     // With --json, stdout carries only the JSON object.
     macro_rules! note {

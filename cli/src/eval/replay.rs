@@ -376,6 +376,9 @@ pub fn replay_observed(
                 }
             }
             if row_is_last {
+                sum.nominal_bias.push(core::array::from_fn(|i| {
+                    r.nominal_bias.get(i).copied().unwrap_or(0.0)
+                }));
                 if let Some(inf) = r.detail.innovation_inflation {
                     sum.innovation_inflation.push(inf);
                 }

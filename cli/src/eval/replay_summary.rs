@@ -92,6 +92,11 @@ pub struct ReplaySummary {
     pub monitored_samples: usize,
     /// Per channel.
     pub channels: Vec<ChannelSummary>,
+    /// Per IMU, the nominal bias the monitor learnt and removes on the last
+    /// row `[a_x, a_y, a_z (m/s²), g_x, g_y, g_z (rad/s)]`: bounded by the
+    /// turn-on bias (`--turn-on-bias`), beyond which a bias present from
+    /// power-up is reported as a fault.
+    pub nominal_bias: Vec<[f64; 6]>,
     /// Per IMU, the UKF monitor's learned inflation of each aiding
     /// channel's t statistic `[v×3, roll, pitch, yaw]` (empty for the
     /// OTSUKF).

@@ -61,7 +61,7 @@ impl<T: Real> OtsukfMonitor<T> {
             Vector3::from_fn(|i, _| v.get(first + i).copied().unwrap_or_else(T::zero))
         };
         ChannelLimits {
-            nominal: rows(b.min_fault * T::lit(super::NOMINAL_CAP)),
+            nominal: rows(b.nominal_bias_bound()),
             relevant: rows(b.min_fault * b.threshold_fraction),
         }
     }

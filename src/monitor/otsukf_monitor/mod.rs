@@ -32,10 +32,6 @@ use velocity_lag::{VelocityLag, LAG_RING};
 
 pub use config::OtsukfConfig;
 
-/// Largest nominal bias learnt, in `min_fault`s (as the innovation
-/// monitor's): anything larger is a fault present from power-on.
-const NOMINAL_CAP: f64 = 20.0;
-
 /// Statistics pause after an unusable or saturated sample, s.
 const INPUT_HOLDOFF_S: f64 = 0.5;
 
@@ -450,10 +446,11 @@ impl<T: Real> OtsukfMonitor<T> {
                 self.blocks_reset();
             }
             Some(Phase::Monitoring) => {
-                let cap = T::lit(NOMINAL_CAP);
+                // The turn-on bound, as the innovation monitor's: anything
+                // larger is a fault present from power-on.
                 self.nominal = self
                     .nominal
-                    .zip_map(&b.min_fault, |f, m| f.max(-m * cap).min(m * cap));
+                    .zip_map(&b.nominal_bias_bound(), |f, m| f.max(-m).min(m));
                 self.latched = [0; 6];
                 self.phase = Phase::Monitoring;
                 // Frozen from here on: a fault cannot raise its own `R`.

@@ -70,6 +70,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 self.learn_inflation();
                 self.track_inflation(T::one());
                 if let Some(f) = if held { None } else { instant(self) } {
+                    // Before the bound: what the learner would hold without
+                    // it (`power_up.rs`), once it has converged.
+                    let learnt = self.phase_time - self.cfg.converge_s;
+                    let second_half = learnt >= self.cfg.learn_s * T::lit(0.5);
+                    self.power_up.learn(&(self.nominal_bias + f), second_half);
                     let k = (dt_learn / self.cfg.learn_tau_s).min(T::one());
                     self.nominal_bias += f * k;
                 }
@@ -84,6 +89,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 }
                 self.att_rate_apply();
                 self.vel_inc_apply();
+                self.power_up_apply(held, dt_learn, &instant);
                 // Not while the gyro/attitude test sees something either: a
                 // slow bias under its threshold is not absorbed.
                 let quiet = covered
@@ -125,6 +131,34 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         for (b, m) in self.nominal_bias.iter_mut().zip(cap.iter()) {
             *b = b.fmax(-*m).fmin(*m);
         }
+    }
+
+    /// A bias beyond the turn-on bound found at monitoring start
+    /// (`power_up.rs`): followed while flagged (over half a learning
+    /// phase), reported where the other tests find the channel healthy or
+    /// cannot judge it.
+    fn power_up_apply(
+        &mut self,
+        held: bool,
+        dt_learn: T,
+        instant: &dyn Fn(&Self) -> Option<ImuVec<T>>,
+    ) {
+        if !self.power_up.any() {
+            return;
+        }
+        let bound = self.nominal_bias_bound();
+        let smallest = self.cfg.min_fault * self.cfg.threshold_fraction;
+        if let Some(f) = if held { None } else { instant(self) } {
+            let span = (self.cfg.learn_s * T::lit(0.5)).fmax(T::lit(1e-3));
+            let k = (dt_learn / span).fmin(T::one());
+            self.power_up
+                .track(&(self.nominal_bias + f), k, &bound, &smallest);
+        }
+        self.power_up.apply(
+            &mut self.report.status,
+            &mut self.report.fault_estimate,
+            &bound,
+        );
     }
 
     fn detect(&mut self, _health: &Health) {

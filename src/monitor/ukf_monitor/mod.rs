@@ -30,6 +30,7 @@ mod history;
 #[cfg(feature = "inflation-tracking")]
 mod inflation_cover;
 mod phase;
+mod power_up;
 mod realign;
 #[cfg(feature = "velocity-increment-test")]
 mod velocity_increment;
@@ -48,9 +49,6 @@ pub const MAX_DELAY_STEPS: usize = 32;
 const DELAY_RELEARN_STEPS: usize = 3;
 
 const MEAS_ANGLES: [bool; NZ] = [false, false, false, true, true, true];
-/// Largest nominal bias the learner may assume, as a multiple of `min_fault`:
-/// anything larger is a fault from power-on, not a nominal error.
-const MAX_NOMINAL_BIAS_FACTOR: f64 = 20.0;
 
 /// The configured window statistic, or the normalised one when the t-tests
 /// are not compiled in (feature `t-statistics`; the configuration is then
@@ -96,6 +94,8 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     latest_innovation: ImuVec<T>,
     latest_variance: ImuVec<T>,
     nominal_bias: ImuVec<T>,
+    /// A bias beyond the turn-on bound from power-up (`power_up.rs`).
+    power_up: power_up::PowerUpCheck<T>,
     learn_clock: T,
     /// Learned variance inflation of each channel's t statistic (≥ 1).
     inflation: [T; NZ],
@@ -190,6 +190,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             latest_innovation: ImuVec::zeros(),
             latest_variance: ImuVec::from_element(T::one()),
             nominal_bias: ImuVec::zeros(),
+            power_up: power_up::PowerUpCheck::default(),
             learn_clock: T::zero(),
             inflation: [T::one(); NZ],
             inflation_sum: [T::zero(); NZ],
@@ -280,13 +281,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.persistence.reset();
     }
 
-    /// Largest nominal bias per channel the learner may assume: the
-    /// configured turn-on bound, else `MAX_NOMINAL_BIAS_FACTOR × min_fault`.
-    /// Beyond it a bias is a fault from power-on.
+    /// Largest nominal bias per channel the learner may assume
+    /// ([`UkfMonitorConfig::nominal_bias_bound`]).
     fn nominal_bias_bound(&self) -> ImuVec<T> {
-        self.cfg
-            .max_nominal_bias
-            .unwrap_or_else(|| self.cfg.min_fault * T::lit(MAX_NOMINAL_BIAS_FACTOR))
+        self.cfg.nominal_bias_bound()
     }
 
     /// The block tests' per-channel limits for the three channels from

@@ -26,6 +26,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             Some(Phase::Monitoring) => {
                 self.phase = Phase::Monitoring;
                 self.freeze_inflation();
+                let smallest = self.cfg.min_fault * self.cfg.threshold_fraction;
+                self.power_up
+                    .start(&self.cfg.nominal_bias_bound(), &smallest);
                 #[cfg(feature = "inflation-tracking")]
                 {
                     let floor = T::lit(2.0 * W as f64);
@@ -64,6 +67,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             self.cover = super::inflation_cover::InflationCover::default();
         }
         self.inflation = [T::one(); NZ];
+        self.power_up = super::power_up::PowerUpCheck::default();
         self.att_rate_reset();
         self.vel_inc_reset();
         for w in self.windows.iter_mut() {
