@@ -41,24 +41,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     pub(super) fn after_update(&mut self, health: &Health) {
         let dt_learn = self.phase_time - self.learn_clock;
         self.learn_clock = self.phase_time;
-        // Instant estimate from the latest innovation of every channel; only
-        // computed when the learner or the drift tracker will use it. Not
-        // the horizontal accelerometers' from an epoch an unresolved
-        // heading offset may have contaminated (`heading.rs`).
-        let instant = |s: &Self| {
-            let w = s.latest_variance.map(|v| T::one() / v);
-            let f = estimate_corrected(&s.signature, &w, &s.latest_innovation, &[true; NZ]);
-            if s.heading_on() && s.heading.contaminated {
-                f.map(|mut f| {
-                    for v in f.iter_mut().take(2) {
-                        *v = T::zero();
-                    }
-                    f
-                })
-            } else {
-                f
-            }
-        };
+        // Instant estimate from the latest innovation of every channel
+        // (`instant_estimate`); only computed when the learner, the drift
+        // tracker or the power-up check will use it.
+        let instant = |s: &Self| s.instant_estimate();
         // Nothing is learned while the statistics are held (a bad sample, a
         // re-alignment, aiding back after a loss): the innovations then
         // measure the filter's re-convergence, and `dt_learn` may span a
@@ -89,7 +75,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 }
                 self.att_rate_apply();
                 self.vel_inc_apply();
-                self.power_up_apply(held, dt_learn, &instant);
+                let f = if self.power_up.any() && !held {
+                    instant(self)
+                } else {
+                    None
+                };
+                self.power_up_apply(f, dt_learn);
                 // Not while the gyro/attitude test sees something either: a
                 // slow bias under its threshold is not absorbed.
                 let quiet = covered
@@ -133,22 +124,40 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
     }
 
+    /// The instant estimate from the latest innovation of every channel.
+    /// Not the horizontal accelerometers' from an epoch an unresolved
+    /// heading offset may have contaminated (`heading.rs`). Out of line:
+    /// three call sites (flash on the M4F).
+    #[inline(never)]
+    fn instant_estimate(&self) -> Option<ImuVec<T>> {
+        let w = self.latest_variance.map(|v| T::one() / v);
+        let f = estimate_corrected(&self.signature, &w, &self.latest_innovation, &[true; NZ]);
+        if self.heading_on() && self.heading.contaminated {
+            f.map(|mut f| {
+                for v in f.iter_mut().take(2) {
+                    *v = T::zero();
+                }
+                f
+            })
+        } else {
+            f
+        }
+    }
+
     /// A bias beyond the turn-on bound found at monitoring start
     /// (`power_up.rs`): followed while flagged (over half a learning
     /// phase), reported where the other tests find the channel healthy or
     /// cannot judge it.
-    fn power_up_apply(
-        &mut self,
-        held: bool,
-        dt_learn: T,
-        instant: &dyn Fn(&Self) -> Option<ImuVec<T>>,
-    ) {
+    /// `instant`: this epoch's instant estimate (`None`: held). Out of
+    /// line: it acts only after a power-up fault (flash on the M4F).
+    #[inline(never)]
+    fn power_up_apply(&mut self, instant: Option<ImuVec<T>>, dt_learn: T) {
         if !self.power_up.any() {
             return;
         }
         let bound = self.nominal_bias_bound();
         let smallest = self.cfg.min_fault * self.cfg.threshold_fraction;
-        if let Some(f) = if held { None } else { instant(self) } {
+        if let Some(f) = instant {
             let span = (self.cfg.learn_s * T::lit(0.5)).fmax(T::lit(1e-3));
             let k = (dt_learn / span).fmin(T::one());
             self.power_up

@@ -30,6 +30,10 @@ mod history;
 #[cfg(feature = "inflation-tracking")]
 mod inflation_cover;
 mod phase;
+#[cfg(feature = "power-up-check")]
+mod power_up;
+#[cfg(not(feature = "power-up-check"))]
+#[path = "power_up_off.rs"]
 mod power_up;
 mod realign;
 #[cfg(feature = "velocity-increment-test")]

@@ -69,6 +69,7 @@ fn beyond<T: Real>(x: T, bound: T) -> T {
 impl<T: Real> PowerUpCheck<T> {
     /// A learning epoch: `unbounded` is the nominal bias plus the instant
     /// estimate; `second_half`: the learner has converged.
+    #[inline(never)]
     pub(super) fn learn(&mut self, unbounded: &ImuVec<T>, second_half: bool) {
         if second_half && unbounded.iter().all(|v| v.finite()) {
             self.sum += unbounded;
@@ -78,6 +79,7 @@ impl<T: Real> PowerUpCheck<T> {
 
     /// Monitoring starts: flags the channels whose mean unbounded estimate
     /// lies beyond `bound` by at least `smallest`.
+    #[inline(never)]
     pub(super) fn start(&mut self, bound: &ImuVec<T>, smallest: &ImuVec<T>) {
         if self.n <= T::zero() {
             return;
