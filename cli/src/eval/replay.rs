@@ -376,9 +376,10 @@ pub fn replay_observed(
                 }
             }
             if row_is_last {
-                sum.nominal_bias.push(core::array::from_fn(|i| {
-                    r.nominal_bias.get(i).copied().unwrap_or(0.0)
-                }));
+                let b = |i: usize| r.nominal_bias.get(i).copied().unwrap_or(0.0);
+                sum.nominal_bias_accel_m_s2.push(core::array::from_fn(b));
+                sum.nominal_bias_gyro_rad_s
+                    .push(core::array::from_fn(|i| b(i + 3)));
                 if let Some(inf) = r.detail.innovation_inflation {
                     sum.innovation_inflation.push(inf);
                 }

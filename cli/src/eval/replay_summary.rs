@@ -92,11 +92,13 @@ pub struct ReplaySummary {
     pub monitored_samples: usize,
     /// Per channel.
     pub channels: Vec<ChannelSummary>,
-    /// Per IMU, the nominal bias the monitor learnt and removes on the last
-    /// row `[a_x, a_y, a_z (m/s²), g_x, g_y, g_z (rad/s)]`: bounded by the
-    /// turn-on bias (`--turn-on-bias`), beyond which a bias present from
-    /// power-up is reported as a fault.
-    pub nominal_bias: Vec<[f64; 6]>,
+    /// Per IMU, the accelerometer nominal bias the monitor learnt and
+    /// removes on the last row `[x, y, z]`: bounded by the turn-on bias
+    /// (`--turn-on-bias`), beyond which a bias present from power-up is
+    /// reported as a fault.
+    pub nominal_bias_accel_m_s2: Vec<[f64; 3]>,
+    /// Per IMU, the gyro nominal bias, likewise.
+    pub nominal_bias_gyro_rad_s: Vec<[f64; 3]>,
     /// Per IMU, the UKF monitor's learned inflation of each aiding
     /// channel's t statistic `[v×3, roll, pitch, yaw]` (empty for the
     /// OTSUKF).
