@@ -12,6 +12,7 @@
 # channel after the glitch ended, once it had been raised). A flag event that overlaps a fault-free
 # event of the same channel is not counted. CASES=1 lists every slow or
 # cascading case. Needs python3.
+# BIN (default ./target/release/imu-fdi-sim) runs another build of the tool.
 # Usage: scripts/single-imu-glitches.sh [ukf|otsukf] [extra replay options]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -19,7 +20,7 @@ MON=${1:-ukf}
 shift || true
 DATA=${DATA:-tests/data}
 IMU_CSV=${IMU_CSV:-$DATA/ap_log171_3imu.csv}
-BIN=./target/release/imu-fdi-sim
+BIN=${BIN:-./target/release/imu-fdi-sim}
 cargo build -q -p imu-fdi-cli --release --bin imu-fdi-sim
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
