@@ -167,8 +167,15 @@ impl<T: Real> OtsukfMonitor<T> {
         };
         self.track.elapse(elapsed);
         self.holdoff = (self.holdoff - elapsed).max(T::zero());
-        for (a, l) in self.flagged_for.iter_mut().zip(self.latched.iter()) {
-            *a = if *l != 0 { *a + elapsed } else { T::zero() };
+        // The flags' ages serve only the block tests' end-of-fault rule
+        // (`recover.rs`): not kept in images without them.
+        if cfg!(any(
+            feature = "attitude-rate-test",
+            feature = "velocity-increment-test"
+        )) {
+            for (a, l) in self.flagged_for.iter_mut().zip(self.latched.iter()) {
+                *a = if *l != 0 { *a + elapsed } else { T::zero() };
+            }
         }
         // Aiding outside its physical range is never used.
         let (aiding_checked, aiding_invalid) = aiding_in_range(aiding, b.max_aiding_speed);
