@@ -133,6 +133,28 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> Otsukf<T, N, S, L>
         self.bias_free.reset(x, px);
     }
 
+    /// Restarts the fault channels `channels` at `f0` with their initial
+    /// variance (rows and columns of `P^f` zeroed, so it stays positive
+    /// definite), e.g. once a fault is known to have ended. The full
+    /// state `x̂ = x̄ + V f̂` moves with `f̂` unless `V` is zero (after
+    /// [`reset_state`](Self::reset_state)).
+    pub fn reset_faults(&mut self, channels: &[bool; L], f0: &SVector<T, L>) {
+        for (j, c) in channels.iter().enumerate() {
+            if !*c {
+                continue;
+            }
+            if let (Some(f), Some(v)) = (self.fault.get_mut(j), f0.get(j)) {
+                *f = *v;
+            }
+            let v0 = self.pf_reset.get((j, j)).copied().unwrap_or_else(T::one);
+            self.pf.row_mut(j).fill(T::zero());
+            self.pf.column_mut(j).fill(T::zero());
+            if let Some(p) = self.pf.get_mut((j, j)) {
+                *p = v0;
+            }
+        }
+    }
+
     /// Time update. `step` propagates a state through the model with the
     /// corrected input `u_m − f̂`; `phi` and `fmat` are `∂x_{k+1}/∂x` and
     /// `∂x_{k+1}/∂f` at the full estimate; `qx` the state process noise.
@@ -351,5 +373,31 @@ impl<T: Real, const N: usize, const S: usize, const L: usize> Otsukf<T, N, S, L>
             fault_gain: kf,
             fault_innovation_variance: a.diagonal(),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The restarted channels take the given estimate and their initial
+    /// variance, uncorrelated; the others keep estimate and covariance.
+    #[test]
+    fn reset_faults_restarts_only_the_given_channels() {
+        let pf0 = SMatrix::<f64, 3, 3>::from_fn(|i, j| if i == j { 2.0 + i as f64 } else { 0.5 });
+        let mut f = Otsukf::<f64, 2, 5, 3>::new(
+            SVector::zeros(),
+            SMatrix::identity(),
+            SVector::from([1.0, 2.0, 3.0]),
+            pf0,
+            SMatrix::identity(),
+            &SigmaParams::default(),
+            [false; 2],
+        )
+        .unwrap();
+        f.reset_faults(&[false, true, false], &SVector::from([9.0, -1.0, 9.0]));
+        assert_eq!(f.fault().as_slice(), &[1.0, -1.0, 3.0]);
+        let want = SMatrix::<f64, 3, 3>::new(2.0, 0.0, 0.5, 0.0, 3.0, 0.0, 0.5, 0.0, 4.0);
+        assert_eq!(*f.fault_covariance(), want);
     }
 }

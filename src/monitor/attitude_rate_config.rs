@@ -74,6 +74,16 @@ pub struct BlockTestConfig<T> {
 }
 
 impl<T: Real> BlockTestConfig<T> {
+    /// How long a channel must have been flagged before the newest
+    /// shortest window lies wholly within the flag, s: that window plus one
+    /// block (block boundaries are not the flag's). A window that began
+    /// before a fault's onset falls short of it without the fault having
+    /// ended.
+    pub fn shortest_span_s(&self) -> T {
+        let blocks = self.lengths.first().copied().unwrap_or(0);
+        self.block_s * T::lit(f64::from(blocks) + 1.0)
+    }
+
     /// The gyro test's: half-second blocks, windows of 2.5, 5 and 10 s, 10 false alarms per
     /// hour by design, a white prior worth 4 windows, judging from 6
     /// degrees of freedom, learning below 0.8 of the threshold, 10 minutes
@@ -201,5 +211,16 @@ mod tests {
             f(&mut c);
             assert_eq!(c.check(), Err(name));
         }
+    }
+
+    /// A flag must be this old before the shortest window lies within it:
+    /// the 2.5-s gyro window and the 2-s velocity window, plus one block.
+    #[test]
+    fn shortest_span_is_the_shortest_window_and_one_block() {
+        assert_eq!(AttitudeRateConfig::<f64>::flight().shortest_span_s(), 3.0);
+        assert_eq!(
+            VelocityIncrementConfig::<f64>::velocity().shortest_span_s(),
+            3.0
+        );
     }
 }

@@ -53,6 +53,9 @@ impl<T: Real> BlockTest<T> {
                 *slot = Some((*wc - off, var.sqrt_fast() * t));
             }
         }
+        if let Some(j) = judged.first() {
+            self.shortest = *j;
+        }
         let mut best = [T::zero(); 3];
         let mut sign = [0i8; 3];
         let mut est = [T::zero(); 3];

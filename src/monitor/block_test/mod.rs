@@ -245,6 +245,9 @@ pub(super) struct BlockTest<T> {
     ukf_mask: [u8; 3],
     /// Per channel: the flag was last confirmed outside that mask.
     confirmed_clean: [bool; 3],
+    /// Per channel: the newest shortest window's deviation from the offset
+    /// and its threshold deviation (`None`: it could not judge).
+    shortest: [Option<(T, T)>; 3],
     pub(super) detail: BlockTestDetail<T>,
 }
 
@@ -279,6 +282,7 @@ impl<T: Real> BlockTest<T> {
             ukf_seen: [false; 3],
             ukf_mask: [0; 3],
             confirmed_clean: [false; 3],
+            shortest: [None; 3],
             detail: BlockTestDetail::default(),
         }
     }
@@ -299,6 +303,7 @@ impl<T: Real> BlockTest<T> {
         self.mute = [0; 3];
         self.ukf_seen = [false; 3];
         self.ukf_mask = [0; 3];
+        self.shortest = [None; 3];
         self.detail.flag = [0; 3];
         self.detail.estimate = [T::zero(); 3];
         self.detail.ratio = [T::zero(); 3];
@@ -313,6 +318,25 @@ impl<T: Real> BlockTest<T> {
     /// channel.
     pub fn quiet(&self, fraction: T) -> bool {
         self.detail.ratio.iter().all(|r| *r < fraction)
+    }
+
+    /// The newest shortest window contradicts a fault of size `f` on
+    /// channel `c` (less the offset): it finds no fault itself (its
+    /// deviation within its threshold deviation) and falls short of `f`,
+    /// in its sign, by more than that threshold deviation. Under a fault of
+    /// that size still present the second part alone has the test's
+    /// per-decision probability (the rule that withdraws a longer window's
+    /// verdict, `decide`); the first keeps a fault the window still sees
+    /// from being called ended when the two estimates disagree on its
+    /// size (log171, 20-s steps of 20 °/s and 3 m/s²: without it, 2 of 36
+    /// lost their flag once). False when the window cannot judge.
+    pub fn contradicts(&self, c: usize, f: T) -> bool {
+        let s = if f > T::zero() { T::one() } else { -T::one() };
+        self.shortest
+            .get(c)
+            .copied()
+            .flatten()
+            .is_some_and(|(d, lim)| d.abs() <= lim && s * (f - d) > lim)
     }
 
     /// A channel of the UKF is flagged: the open block is not learnt.

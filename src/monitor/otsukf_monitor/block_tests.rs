@@ -133,6 +133,49 @@ impl<T: Real> OtsukfMonitor<T> {
         }
     }
 
+    /// The channels the fault estimate has flagged (latched) for at least
+    /// the block test's shortest window and one block (the window then
+    /// lies within the flag) with an estimate `f̂ − b` that window
+    /// contradicts (`BlockTest::contradicts`): faults that have ended.
+    pub(super) fn blocks_ended(&self) -> [bool; 6] {
+        let mut ended = [false; 6];
+        if self.phase != Phase::Monitoring {
+            return ended;
+        }
+        let f = self.filter.fault() - self.nominal;
+        let b = &self.cfg.base;
+        #[cfg(feature = "velocity-increment-test")]
+        let vel = b
+            .velocity_increment
+            .map(|c| (&self.vel_inc.test, c.shortest_span_s()));
+        #[cfg(not(feature = "velocity-increment-test"))]
+        let vel: Option<(&crate::monitor::block_test::BlockTest<T>, T)> = None;
+        #[cfg(feature = "attitude-rate-test")]
+        let att = b
+            .attitude_rate
+            .map(|c| (&self.att_rate.test, c.shortest_span_s()));
+        #[cfg(not(feature = "attitude-rate-test"))]
+        let att: Option<(&crate::monitor::block_test::BlockTest<T>, T)> = None;
+        for (first, test) in [(0, vel), (3, att)] {
+            let Some((t, span)) = test else {
+                continue;
+            };
+            for c in 0..3 {
+                let j = first + c;
+                let (Some(e), Some(l), Some(a), Some(fj)) = (
+                    ended.get_mut(j),
+                    self.latched.get(j),
+                    self.flagged_for.get(j),
+                    f.get(j),
+                ) else {
+                    continue;
+                };
+                *e = *l != 0 && *a >= span && t.contradicts(c, *fj);
+            }
+        }
+        ended
+    }
+
     /// Forgets the intervals and windows (re-alignment).
     pub(super) fn blocks_clear(&mut self) {
         #[cfg(feature = "attitude-rate-test")]

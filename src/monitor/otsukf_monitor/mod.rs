@@ -59,6 +59,8 @@ pub struct OtsukfMonitor<T> {
     /// Samples averaged into `nominal` so far during learning.
     learn_count: T,
     latched: [i8; 6],
+    /// How long each channel has been latched, s (0 when it is not).
+    flagged_for: [T; 6],
     boost: ImuVec<T>,
     /// Gate rejections and last fusion per aiding channel (re-alignment).
     track: AidingTrack<T>,
@@ -116,6 +118,7 @@ impl<T: Real> OtsukfMonitor<T> {
             nominal: ImuVec::zeros(),
             learn_count: T::zero(),
             latched: [0; 6],
+            flagged_for: [T::zero(); 6],
             boost: ImuVec::zeros(),
             track: AidingTrack::new(),
             frozen: FrozenCheck::new(),
@@ -160,6 +163,16 @@ impl<T: Real> OtsukfMonitor<T> {
         };
         self.track.elapse(elapsed);
         self.holdoff = (self.holdoff - elapsed).max(T::zero());
+        // The flags' ages serve only the block tests' end-of-fault rule
+        // (`recover.rs`): not kept in images without them.
+        if cfg!(any(
+            feature = "attitude-rate-test",
+            feature = "velocity-increment-test"
+        )) {
+            for (a, l) in self.flagged_for.iter_mut().zip(self.latched.iter()) {
+                *a = if *l != 0 { *a + elapsed } else { T::zero() };
+            }
+        }
         // Aiding outside its physical range is never used.
         let (aiding_checked, aiding_invalid) = aiding_in_range(aiding, b.max_aiding_speed);
         let aiding = &aiding_checked;
@@ -221,6 +234,9 @@ impl<T: Real> OtsukfMonitor<T> {
                     // velocity test learns its own lag); `fused` says
                     // which channels count.
                     self.blocks_epoch(aiding, &fused);
+                    if self.realign_ended(&present, &omega) {
+                        health.mark_realigned(false);
+                    }
                 }
             }
         }

@@ -61,6 +61,54 @@ impl<T: Real> OtsukfMonitor<T> {
         (out, true)
     }
 
+    /// A flag whose fault has ended (issue 15): the fault estimate tracked
+    /// a large short glitch with a lag, so the attitude (gyro) or velocity
+    /// (accelerometer) integrated part of it, and after the glitch `f̂`
+    /// comes back only as that error is pulled out (log171, 20 °/s for 5 s
+    /// on x: flagged 10 s after the glitch). When a block test's newest
+    /// shortest window contradicts a flagged channel's `f̂ − b` (under a
+    /// fault still present, the test's per-decision probability), the
+    /// fault is over: the triad it corrupted is re-aligned to this
+    /// epoch's aiding, the fault estimates of that triad's channels
+    /// restart at the nominal bias with their initial variance, and their
+    /// flags clear (no new flag for `converge_s`). True when re-aligned.
+    pub(super) fn realign_ended(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>) -> bool {
+        let ended = self.blocks_ended();
+        let vel = ended.iter().take(3).any(|e| *e);
+        let att = ended.iter().skip(3).any(|e| *e);
+        // Not while a flag that has not ended is up (as the innovation
+        // monitor's rule: the re-alignment's hold-off and the block tests'
+        // restart would go with it).
+        let still = self
+            .latched
+            .iter()
+            .zip(ended.iter())
+            .any(|(l, e)| *l != 0 && !*e);
+        if still || (!vel && !att) {
+            return false;
+        }
+        let x = self.filter.state();
+        let (x_new, reset) = realigned_state(&self.model, &self.meas, &x, aiding, omega, att, vel);
+        if !reset.iter().any(|r| *r) {
+            return false;
+        }
+        self.apply_realignment(x_new, &reset);
+        // The channels whose state triad was re-aligned: accelerometers
+        // with the velocity, gyros with the attitude.
+        let restart: [bool; 6] = core::array::from_fn(|j| {
+            let triad = if j < 3 { 0 } else { ROLL };
+            reset.get(triad).copied().unwrap_or(false)
+        });
+        self.filter.reset_faults(&restart, &self.nominal);
+        for (l, r) in self.latched.iter_mut().zip(restart.iter()) {
+            if *r {
+                *l = 0;
+            }
+        }
+        self.blocks_clear();
+        true
+    }
+
     /// At the Euler singularity, the attitude (and velocity, when it
     /// arrived) from an aiding epoch away from it; true when re-aligned.
     pub(super) fn recover_singular(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>) -> bool {

@@ -86,6 +86,26 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         !self.attitude_rate_on() || self.att_rate.test.quiet(T::lit(0.5))
     }
 
+    /// A gyro channel flagged for at least the test's shortest window
+    /// (`flagged_for`, s per channel: the window then lies within the
+    /// flag) with an estimate that window contradicts
+    /// (`BlockTest::contradicts`): the rate fault has ended, what the flag
+    /// still sees is the attitude it integrated into the filter.
+    pub(in crate::monitor::ukf_monitor) fn att_rate_ended(
+        &self,
+        flagged_for: &[T; 6],
+    ) -> [bool; 3] {
+        let Some(cfg) = self.cfg.attitude_rate else {
+            return [false; 3];
+        };
+        let span = cfg.shortest_span_s();
+        core::array::from_fn(|c| {
+            let flagged = flagged_for.get(3 + c).is_some_and(|a| *a >= span);
+            let f = self.report.fault_estimate.get(3 + c).copied();
+            flagged && f.is_some_and(|f| self.att_rate.test.contradicts(c, f))
+        })
+    }
+
     /// Forgets the intervals and windows (re-alignment).
     pub(in crate::monitor::ukf_monitor) fn att_rate_clear(&mut self) {
         self.att_rate.clear_windows();

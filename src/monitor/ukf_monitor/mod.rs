@@ -116,6 +116,8 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     prev_imu: ImuVec<T>,
     frozen_count: u16,
     stats_holdoff: T,
+    /// How long each channel has been flagged, s (0 when it is not).
+    flagged_for: [T; NZ],
     /// Where the last predict's input Jacobian `B` was taken (the state
     /// before it and its attitude trigonometry): `B` is rebuilt from these
     /// when an estimate needs it, instead of a 36-value copy every IMU
@@ -208,6 +210,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             prev_imu: ImuVec::zeros(),
             frozen_count: 0,
             stats_holdoff: T::zero(),
+            flagged_for: [T::zero(); NZ],
             last_input_at: None,
             last_h: Mat6::identity(),
             last_dt: cfg.imu_period,
@@ -450,8 +453,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
 
         // --- learning, drift tracking, detection ----------------------------
+        self.age_flags(elapsed);
         if updated {
             self.after_update(&health);
+            let omega = lever_arm_rates(in_range, &(imu - self.nominal_bias));
+            if self.realign_ended(aiding, &omega) {
+                health.mark_realigned(false);
+            }
         }
         self.advance_phase();
         // The corrected sample of an invalid one is the stand-in the filter

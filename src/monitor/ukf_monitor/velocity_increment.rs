@@ -99,6 +99,22 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         !self.vel_inc_on() || self.vel_inc.test.quiet(T::lit(0.5))
     }
 
+    /// An accelerometer channel flagged for at least the test's shortest
+    /// window (`flagged_for`, s per channel) with an estimate that window
+    /// contradicts (`BlockTest::contradicts`): the fault has ended, what
+    /// the flag still sees is the velocity it integrated into the filter.
+    pub(in crate::monitor::ukf_monitor) fn vel_inc_ended(&self, flagged_for: &[T; 6]) -> [bool; 3] {
+        let Some(cfg) = self.cfg.velocity_increment else {
+            return [false; 3];
+        };
+        let span = cfg.shortest_span_s();
+        core::array::from_fn(|c| {
+            let flagged = flagged_for.get(c).is_some_and(|a| *a >= span);
+            let f = self.report.fault_estimate.get(c).copied();
+            flagged && f.is_some_and(|f| self.vel_inc.test.contradicts(c, f))
+        })
+    }
+
     /// Forgets the intervals and windows (re-alignment).
     pub(in crate::monitor::ukf_monitor) fn vel_inc_clear(&mut self) {
         self.vel_inc.clear_windows();

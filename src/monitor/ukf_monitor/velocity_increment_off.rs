@@ -24,4 +24,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     pub(super) fn vel_inc_reset(&mut self) {}
     #[inline(always)]
     pub(super) fn vel_inc_start(&mut self) {}
+    #[inline(always)]
+    pub(super) fn vel_inc_ended(&self, _flagged_for: &[T; 6]) -> [bool; 3] {
+        [false; 3]
+    }
 }

@@ -1,0 +1,138 @@
+//! Real data, GIVEN ArduPilot log171 (the extracts in tests/data, CC BY-SA
+//! 3.0, see tests/data/LICENSE-ap_log171.md) replayed 80–235 s as
+//! `scripts/single-imu-log171.sh` does, WHEN one large short glitch (an E1
+//! step) is injected on one IMU channel, THEN the single-IMU monitor flags
+//! it, is back to nominal within 5 s of the glitch's end (issue 15: the
+//! simulated campaign's settle time) and raises no other flag on that IMU
+//! (no cascade). `scripts/single-imu-glitches.sh` runs the whole matrix
+//! (docs/recovery.md). Before the re-alignment on an ended fault, IMU0 gz
+//! +20 °/s for 3 s at 200 s stayed flagged to 211.5 s (UKF) and 210.8 s
+//! (OTSUKF); IMU0 gx +20 °/s for 5 s at 120 s to 135.3 s (OTSUKF).
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)] // test code
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const CHANNELS: [&str; 6] = ["ax", "ay", "az", "gx", "gy", "gz"];
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../tests/data")
+        .join(name)
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("imu-fdi-glitch-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+/// The flag events `(channel, on, off)` of IMU0 with monitor `mon`, and
+/// with `glitch` `(axis, °/s, start, end)` a positive step on that gyro
+/// axis (0–2) of IMU0 over `start`–`end` s.
+fn events(mon: &str, glitch: Option<(usize, f64, f64, f64)>) -> Vec<(String, f64, f64)> {
+    let tag = format!("{mon}-{glitch:?}");
+    let csv = tmp(&format!("{}.csv", tag.replace([' ', '(', ')', ','], "_")));
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_imu-fdi-sim"));
+    cmd.arg("replay")
+        .arg(data("ap_log171_3imu.csv"))
+        .arg("--gnss")
+        .arg(data("ap_log171_gps_vel_ned.csv"))
+        .arg("--att")
+        .arg(data("ap_log171_attitude_quat.csv"))
+        .args(["--from", "80", "--to", "235", "--monitor", mon, "--out"])
+        .arg(&csv);
+    if let Some((axis, deg_s, start, end)) = glitch {
+        let toml = csv.with_extension("toml");
+        std::fs::write(
+            &toml,
+            format!(
+                "[sizes]\naccel = [0.0, 0.0, 0.0]\ngyro = [{}, 0.0, 0.0]\n\
+                 f_unit = [1.0, 0.017453292519943295]\n[[faults]]\nchannel = {}\n\
+                 start = {start}\nend = {end}\nkind = \"E1\"\nsign = 1\n",
+                deg_s.to_radians(),
+                3 + axis
+            ),
+        )
+        .unwrap();
+        cmd.arg("--faults").arg(&toml).args(["--inject-imu", "0"]);
+    }
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
+    let cols: Vec<usize> = CHANNELS.iter().map(|c| col(&format!("flag_{c}"))).collect();
+    let t_col = col("t");
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let mut events = Vec::new();
+    for (c, j) in CHANNELS.iter().zip(cols) {
+        let mut on = None;
+        let mut last = 0.0;
+        for r in &rows {
+            let t: f64 = r[t_col].parse().unwrap();
+            last = t;
+            let flagged = !matches!(r[j], "" | "0");
+            match (flagged, on) {
+                (true, None) => on = Some(t),
+                (false, Some(t0)) => {
+                    events.push((c.to_string(), t0, t));
+                    on = None;
+                }
+                _ => {}
+            }
+        }
+        if let Some(t0) = on {
+            events.push((c.to_string(), t0, last));
+        }
+    }
+    events
+}
+
+/// One event on the glitched channel, raised during the glitch and over
+/// within `back_max` s of its end; nothing else on the IMU that the
+/// fault-free replay does not show.
+fn assert_recovers(mon: &str, axis: usize, start: f64, dur: f64, back_max: f64) {
+    let end = start + dur;
+    // The fault-free replay's events (the OTSUKF's a_y at 145.5–148.3 s)
+    // are not the glitch's.
+    let free = events(mon, None);
+    let mut ev = events(mon, Some((axis, 20.0, start, end)));
+    ev.retain(|e| e.2 > start && !free.iter().any(|f| f.0 == e.0 && f.1 < e.2 && e.1 < f.2));
+    let ch = CHANNELS[3 + axis];
+    assert_eq!(ev.len(), 1, "{mon} {ch}: {ev:?}");
+    let (c, on, off) = &ev[0];
+    assert_eq!(c, ch, "{mon}: {ev:?}");
+    assert!(*on < end, "{mon} {ch}: raised at {on}");
+    let back = off - end;
+    assert!(
+        back <= back_max,
+        "{mon} {ch}: back {back:.1} s after the glitch ({ev:?})"
+    );
+}
+
+/// The issue's case, IMU0 gz +20 °/s for 3 s at 200 s: measured back 2.7 s
+/// (UKF, 201.1–205.7 s) and 2.6 s (OTSUKF, 201.1–205.6 s) after the end,
+/// against 8.5 s and 7.8 s before.
+#[test]
+fn gz_20_deg_s_3_s_back_within_5_s_both_monitors() {
+    assert_recovers("ukf", 2, 200.0, 3.0, 3.5);
+    assert_recovers("otsukf", 2, 200.0, 3.0, 3.5);
+}
+
+/// IMU0 gx +20 °/s for 5 s at 120 s, the OTSUKF's slowest case the lead
+/// measured (flagged to 135.3 s before): back 2.4 s after the end.
+#[test]
+fn otsukf_gx_20_deg_s_5_s_back_within_5_s() {
+    assert_recovers("otsukf", 0, 120.0, 5.0, 3.5);
+}
