@@ -160,8 +160,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         if let Some(f) = instant {
             let span = (self.cfg.learn_s * T::lit(0.5)).fmax(T::lit(1e-3));
             let k = (dt_learn / span).fmin(T::one());
-            self.power_up
-                .track(&(self.nominal_bias + f), k, &bound, &smallest);
+            let removed = self.removed_bias();
+            self.power_up.track(&(removed + f), k, &bound, &smallest);
         }
         self.power_up.apply(
             &mut self.report.status,

@@ -288,6 +288,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.persistence.reset();
     }
 
+    /// What is removed from the IMU before the filter: the nominal bias
+    /// and a power-up excess while it is flagged (`power_up.rs`).
+    fn removed_bias(&self) -> ImuVec<T> {
+        self.nominal_bias + self.power_up.excess()
+    }
+
     /// Largest nominal bias per channel the learner may assume
     /// ([`UkfMonitorConfig::nominal_bias_bound`]).
     fn nominal_bias_bound(&self) -> ImuVec<T> {
@@ -398,7 +404,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             // Through a dropout or an invalid/frozen sample, the last good
             // sample stands in: better than freezing the state while the
             // vehicle moves, which would flag every channel afterwards.
-            let u = if usable { *imu } else { self.prev_imu } - self.nominal_bias;
+            let u = if usable { *imu } else { self.prev_imu } - self.removed_bias();
             self.att_rate_sample(imu, dt, usable);
             self.vel_inc_sample(imu, dt, usable);
             match self.predict(&u, dt) {
@@ -420,13 +426,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // Through ±90° (a loop, a tumble): the attitude is re-aligned from
         // the aiding instead of staying singular (issue 16).
         if health.pitch_singular && meas_ok {
-            let omega = lever_arm_rates(in_range, &(imu - self.nominal_bias));
+            let omega = lever_arm_rates(in_range, &(imu - self.removed_bias()));
             if self.recover_singular(aiding, &omega) {
                 health.mark_realigned(false);
             }
         }
         if meas_ok && !health.pitch_singular {
-            let omega = lever_arm_rates(in_range, &(imu - self.nominal_bias));
+            let omega = lever_arm_rates(in_range, &(imu - self.removed_bias()));
             self.hold_after_loss(aiding);
             let (aiding, realigned) = self.realign_outliers(aiding, &omega);
             if realigned {
@@ -456,7 +462,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.age_flags(elapsed);
         if updated {
             self.after_update(&health);
-            let omega = lever_arm_rates(in_range, &(imu - self.nominal_bias));
+            let omega = lever_arm_rates(in_range, &(imu - self.removed_bias()));
             if self.realign_ended(aiding, &omega) {
                 health.mark_realigned(false);
             }

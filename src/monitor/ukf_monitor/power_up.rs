@@ -16,6 +16,9 @@
 //! - at monitoring start a channel whose mean lies beyond the bound by at
 //!   least the smallest fault reported (`min_fault × threshold_fraction`)
 //!   is reported faulty in that sign, with the excess as its estimate;
+//! - while flagged, the excess is removed from the IMU with the nominal
+//!   bias, so the filter runs on a consistent input (left in, a 10 °/s g_z
+//!   bias turned the velocity prediction and flagged a_x/a_y too);
 //! - **the way back**: while flagged, the same unbounded estimate is
 //!   followed (an average over half a learning phase); the flag clears once
 //!   it is back within the bound plus half the smallest fault reported (a
@@ -42,6 +45,9 @@ pub(super) struct PowerUpCheck<T> {
     follow: ImuVec<T>,
     /// Per channel: −1, 0 or +1.
     flag: [i8; 6],
+    /// Per flagged channel, how far `follow` lies beyond the bound (0
+    /// elsewhere): removed from the IMU with the nominal bias.
+    excess: ImuVec<T>,
 }
 
 impl<T: Real> Default for PowerUpCheck<T> {
@@ -51,6 +57,7 @@ impl<T: Real> Default for PowerUpCheck<T> {
             n: T::zero(),
             follow: ImuVec::zeros(),
             flag: [0; 6],
+            excess: ImuVec::zeros(),
         }
     }
 }
@@ -100,7 +107,17 @@ impl<T: Real> PowerUpCheck<T> {
             } else {
                 0
             };
+            if let Some(x) = self.excess.get_mut(j) {
+                *x = if *f == 0 { T::zero() } else { e };
+            }
         }
+    }
+
+    /// What the monitor removes from the IMU beyond the nominal bias: the
+    /// flagged channels' excess (the filter then runs on a consistent
+    /// input instead of turning a gyro bias into velocity errors).
+    pub(super) fn excess(&self) -> ImuVec<T> {
+        self.excess
     }
 
     /// Whether any channel is flagged (the estimate is then followed).
@@ -109,7 +126,8 @@ impl<T: Real> PowerUpCheck<T> {
     }
 
     /// A monitoring epoch while flagged: follows the unbounded estimate
-    /// with gain `k` and clears a channel back within `bound` plus half of
+    /// (the removed bias, excess included, plus the instant estimate) with
+    /// gain `k` and clears a channel back within `bound` plus half of
     /// `smallest`.
     pub(super) fn track(
         &mut self,
@@ -133,8 +151,12 @@ impl<T: Real> PowerUpCheck<T> {
             if u.finite() {
                 *x += (*u - *x) * k;
             }
-            if beyond(*x, *b).abs() < *s * T::lit(0.5) {
+            let e = beyond(*x, *b);
+            if e.abs() < *s * T::lit(0.5) {
                 *f = 0;
+            }
+            if let Some(ex) = self.excess.get_mut(j) {
+                *ex = if *f == 0 { T::zero() } else { e };
             }
         }
     }
@@ -189,6 +211,7 @@ mod tests {
         }
         c.start(&bound, &small);
         assert_eq!(c.flag, [1, 0, 0, 0, 0, 0]);
+        assert!((c.excess()[0] - 0.5).abs() < 1e-12 && c.excess()[1] == 0.0);
         let mut st = [ChannelState::Healthy; 6];
         st[1] = ChannelState::FaultNegative; // another test's decision stays
         let mut est = ImuVec::zeros();
@@ -204,6 +227,7 @@ mod tests {
             c.track(&u, 0.5, &bound, &small);
         }
         assert!(!c.any());
+        assert_eq!(c.excess(), ImuVec::zeros());
     }
 
     #[test]

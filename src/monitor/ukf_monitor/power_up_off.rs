@@ -31,6 +31,10 @@ impl<T: Real> PowerUpCheck<T> {
         false
     }
     #[inline(always)]
+    pub(super) fn excess(&self) -> ImuVec<T> {
+        ImuVec::zeros()
+    }
+    #[inline(always)]
     pub(super) fn track(&mut self, _u: &ImuVec<T>, _k: T, _b: &ImuVec<T>, _s: &ImuVec<T>) {}
     #[inline(always)]
     pub(super) fn apply(&self, _s: &mut [ChannelState; 6], _e: &mut ImuVec<T>, _b: &ImuVec<T>) {}
