@@ -15,22 +15,10 @@
     clippy::panic
 )] // test code
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
+use common::{bin, data, tmp};
 
 const CHANNELS: [&str; 6] = ["ax", "ay", "az", "gx", "gy", "gz"];
-
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/data")
-        .join(name)
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("imu-fdi-glitch-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
 
 /// The flag events `(channel, on, off)` of IMU0 with monitor `mon`, and
 /// with `glitch` `(axis, °/s, start, end)` a positive step on that gyro
@@ -38,7 +26,7 @@ fn tmp(name: &str) -> PathBuf {
 fn events(mon: &str, glitch: Option<(usize, f64, f64, f64)>) -> Vec<(String, f64, f64)> {
     let tag = format!("{mon}-{glitch:?}");
     let csv = tmp(&format!("{}.csv", tag.replace([' ', '(', ')', ','], "_")));
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_imu-fdi-sim"));
+    let mut cmd = bin();
     cmd.arg("replay")
         .arg(data("ap_log171_3imu.csv"))
         .arg("--gnss")

@@ -16,20 +16,8 @@
     clippy::panic
 )] // test code
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/data")
-        .join(name)
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("imu-fdi-log171-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
+mod common;
+use common::{bin, data, tmp};
 
 /// `replay` of the shipped log171 extracts, 80–235 s, with `extra`; the
 /// JSON summary.
@@ -39,7 +27,7 @@ fn replay(extra: &[&str]) -> serde_json::Value {
 
 /// `replay` from `from` s to 235 s, with `extra`.
 fn replay_from(from: &str, extra: &[&str]) -> serde_json::Value {
-    let out = Command::new(env!("CARGO_BIN_EXE_imu-fdi-sim"))
+    let out = bin()
         .arg("replay")
         .arg(data("ap_log171_3imu.csv"))
         .arg("--gnss")
@@ -133,7 +121,7 @@ fn estimators_find_no_attitude_lag_and_a_quarter_second_gps_lag() {
         }
     }
     // The OTSUKF has no delayed fusion of its own: the replay says so.
-    let out = Command::new(env!("CARGO_BIN_EXE_imu-fdi-sim"))
+    let out = bin()
         .arg("replay")
         .arg(data("ap_log171_3imu.csv"))
         .arg("--gnss")

@@ -23,6 +23,13 @@ pub fn bin_cmd_output(args: &[&str]) -> String {
     String::from_utf8_lossy(&o.stdout).to_string()
 }
 
+/// A file of the repository's `tests/data` (the shipped log extracts).
+pub fn data(name: &str) -> PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../tests/data")
+        .join(name)
+}
+
 /// A path in this test process's own temp dir.
 pub fn tmp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("imu-fdi-cli-{}", std::process::id()));

@@ -467,8 +467,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         self.age_flags(elapsed);
         if updated {
             self.after_update(&health);
-            let omega = lever_arm_rates(in_range, &(imu - self.removed_bias()));
-            if self.realign_ended(aiding, &omega) {
+            if self.realign_ended(aiding, in_range, imu) {
                 health.mark_realigned(false);
             }
         }

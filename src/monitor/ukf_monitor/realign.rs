@@ -114,8 +114,15 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// under a fault still present, its per-decision probability), the
     /// fault is over: the triad it corrupted is
     /// re-aligned to this epoch's aiding as after an aiding jump, and the
-    /// statistics restart. True when re-aligned.
-    pub(super) fn realign_ended(&mut self, aiding: &Measurement<T>, omega: &Vector3<T>) -> bool {
+    /// statistics restart. True when re-aligned. The rates the
+    /// re-alignment needs (from `imu`, `in_range`) are computed only then:
+    /// this runs at every aiding update.
+    pub(super) fn realign_ended(
+        &mut self,
+        aiding: &Measurement<T>,
+        in_range: bool,
+        imu: &ImuVec<T>,
+    ) -> bool {
         if !BLOCK_TESTS || self.phase != Phase::Monitoring {
             return false;
         }
@@ -152,12 +159,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         } else {
             aiding
         };
+        let omega = lever_arm_rates(in_range, &(*imu - self.removed_bias()));
         let (x, reset) = realigned_state(
             &self.model,
             &self.meas,
             self.ukf.state(),
             aiding,
-            omega,
+            &omega,
             att,
             vel,
         );
