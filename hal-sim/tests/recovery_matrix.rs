@@ -22,7 +22,7 @@ use hal_sim::runner::{monitor_config, RunOptions};
 use hal_sim::Scenario;
 use imu_fdi::model::AidingKind;
 use imu_fdi::monitor::{OtsukfMonitor, UkfMonitor};
-use imu_fdi::parity::{Geometry, ParityConfig, ParityMonitor, Reading};
+use imu_fdi::parity::{Geometry, ParityConfig, ParityMonitor, Reading, SensorStatus};
 use rand::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
@@ -329,16 +329,29 @@ const PARITY_CLASSES: [ParityClass; 12] = [
 
 const PARITY_SENSOR: usize = 2;
 
+/// One step of a parity run after the last bad sample.
+struct ParityStep {
+    /// Seconds since the last bad sample.
+    t: f64,
+    /// Why the monitor is off nominal, if it is.
+    why: Option<&'static str>,
+    /// The faulty sensor's status.
+    status: SensorStatus,
+    /// Alarm raised.
+    fault: bool,
+}
+
 /// The run with `class` injected (or, as `control`, with the same periods
 /// withheld from the monitor instead: a plain gap, which shifts the block
-/// sequence the same way); per step of the verdict window, why the monitor
-/// is off nominal.
+/// sequence the same way), flown `horizon` s past the last bad sample;
+/// per step after it, why the monitor is off nominal.
 fn parity_steps(
     class: ParityClass,
     flight: bool,
     seed: u64,
     control: bool,
-) -> Vec<(f64, Option<&'static str>)> {
+    horizon: f64,
+) -> Vec<ParityStep> {
     let fault_at = 5.0;
     let (samples, latches) = match class {
         ParityClass::NanShort | ParityClass::OutOfRangeShort => (3, false),
@@ -358,7 +371,7 @@ fn parity_steps(
         cone6_directions(),
         ArrayKind::Gyro,
         Layout::Single,
-        end + SETTLE_S + CHECK_S,
+        end + horizon,
     );
     let sim = ArraySim::new(&spec, seed);
     let fs = spec.errors.full_scale as f32;
@@ -406,9 +419,14 @@ fn parity_steps(
             }
         }
         let r = m.step(&readings);
-        if s.t >= end + SETTLE_S {
+        if s.t >= end {
             let l = if control { [false; 6] } else { latched };
-            out.push((s.t - end, parity_off_nominal(&r, &l)));
+            out.push(ParityStep {
+                t: s.t - end,
+                why: parity_off_nominal(&r, &l),
+                status: r.status[PARITY_SENSOR],
+                fault: r.fault,
+            });
         }
     }
     out
@@ -423,13 +441,18 @@ fn parity_run(
     flight: bool,
     seed: u64,
 ) -> (Result<(), (f64, &'static str)>, bool) {
-    let run = parity_steps(class, flight, seed, false);
-    let control = parity_steps(class, flight, seed, true);
+    let run = parity_steps(class, flight, seed, false, SETTLE_S + CHECK_S);
+    let control = parity_steps(class, flight, seed, true, SETTLE_S + CHECK_S);
     let mut control_alarm = false;
-    for ((t, why), (_, c)) in run.iter().zip(control.iter()) {
-        match (why, c) {
+    let verdict = |s: &&ParityStep| s.t >= SETTLE_S;
+    for (r, c) in run
+        .iter()
+        .filter(verdict)
+        .zip(control.iter().filter(verdict))
+    {
+        match (r.why, c.why) {
             (Some("alarm"), Some("alarm")) => control_alarm = true,
-            (Some(w), _) => return (Err((*t, *w)), control_alarm),
+            (Some(w), _) => return (Err((r.t, w)), control_alarm),
             _ => {}
         }
     }
@@ -463,6 +486,67 @@ fn parity_monitor_recovers_from_every_class() {
          covariance loss (no recursive filter: fixed baseline from training)"
     );
     assert_eq!(failed, 0, "parity: {failed} runs not back to nominal");
+}
+
+/// The hardware failures that latch, once their output is good again: the
+/// multi-scale monitor judges the sensor against the others and re-admits
+/// it after its probation (the longest window filled, then twice it
+/// quiet: 10 + 20 s), with no alarm on the way; the white-noise monitor
+/// keeps it out until reset, reported failed to the end.
+#[test]
+fn parity_monitor_readmits_a_sensor_once_its_hardware_failure_ended() {
+    println!(
+        "\n| class (sensor {PARITY_SENSOR}) | multiscale: back in the set after (s), per seed |"
+    );
+    println!("|---|---|");
+    for class in [
+        ParityClass::NanLong,
+        ParityClass::Stuck,
+        ParityClass::SaturatedLong,
+        ParityClass::DropoutLong,
+    ] {
+        let mut backs = Vec::new();
+        for seed in 1..=SEEDS {
+            let run = parity_steps(class, true, seed, false, 50.0);
+            let control = parity_steps(class, true, seed, true, 50.0);
+            let back = run
+                .iter()
+                .find(|s| s.status == SensorStatus::Healthy)
+                .map(|s| s.t);
+            let t_back = back.unwrap_or_else(|| panic!("{class:?} seed {seed}: never re-admitted"));
+            assert!(
+                (25.0..40.0).contains(&t_back),
+                "{class:?} seed {seed}: back after {t_back} s"
+            );
+            // Out of the set until then, in the set and healthy after,
+            // and no alarm the control (same gap, no bad values) has not.
+            for (r, c) in run.iter().zip(control.iter()) {
+                if r.t < t_back {
+                    assert!(
+                        r.status.is_failed(),
+                        "{class:?} {seed} {}: {:?}",
+                        r.t,
+                        r.status
+                    );
+                } else {
+                    assert_eq!(r.status, SensorStatus::Healthy, "{class:?} {seed} {}", r.t);
+                }
+                assert!(
+                    !r.fault || c.fault,
+                    "{class:?} seed {seed}: alarm at {} s",
+                    r.t
+                );
+            }
+            // The white-noise monitor: out until reset.
+            let white = parity_steps(class, false, seed, false, 50.0);
+            assert!(
+                white.iter().all(|s| s.status.is_failed()),
+                "{class:?} {seed}"
+            );
+            backs.push(format!("{t_back:.2}"));
+        }
+        println!("| {class:?} | {} |", backs.join(", "));
+    }
 }
 
 /// The cause of the last open cell (issue 16): after 180 s without aiding

@@ -43,7 +43,10 @@ pub enum SensorStatus {
     OutOfRange,
     /// Bus error this period.
     BusError,
-    /// Failed: identical output for `stuck_samples` periods.
+    /// Failed: identical output for `stuck_samples` periods. This and the
+    /// failures below latch until reset, except with the multi-scale
+    /// monitor, which judges the sensor for re-admission once its output
+    /// is good again (then [`ParityIsolated`](Self::ParityIsolated)).
     Stuck,
     /// Failed: no sample for `timeout_samples` periods.
     Timeout,
@@ -54,7 +57,8 @@ pub enum SensorStatus {
     /// Failed: clipping for `rail_samples` periods in a row while most other
     /// sensors did not (output railed at full scale).
     Railed,
-    /// Out of the set: isolated by the parity test. The multi-scale
+    /// Out of the set: isolated by the parity test, or excluded by a
+    /// hardware failure whose output is good again. The multi-scale
     /// monitor keeps judging it against the sensors in the set and
     /// re-admits it once its error has decayed (see
     /// [`Probation`](Self::Probation)); otherwise latched until reset.
@@ -159,7 +163,8 @@ pub struct SensorHealth<T> {
     bus_errors_total: u32,
     clipping: u16,
     latched: Option<SensorStatus>,
-    /// See [`out_sample`](Self::out_sample).
+    /// See [`out_sample`](Self::out_sample); after a hardware failure, the
+    /// latest sample that passed the checks, for [`resume`](Self::resume).
     out_sample: Option<T>,
 }
 
@@ -172,8 +177,8 @@ impl<T: Real> SensorHealth<T> {
         cfg: &HealthConfig<T>,
     ) -> (Option<T>, SensorStatus) {
         let (value, status) = self.check_unlatched(reading, cfg);
-        if status.is_failed() {
-            self.latched = Some(status);
+        if self.latched != Some(status) {
+            self.latch(status);
         }
         (value, status)
     }
@@ -191,16 +196,38 @@ impl<T: Real> SensorHealth<T> {
             if failed.is_parity_out() {
                 return self.out_of_set(value, status, failed);
             }
+            // Kept (never handed out) for `resume`.
+            self.out_sample = value;
             return (None, failed);
         }
         (value, status)
     }
 
+    /// A hardware failure whose output is good again — this period's
+    /// sample passed the checks: the first changed sample after a freeze,
+    /// a sample after a timeout, a finite in-range one after invalid
+    /// output, one below the rail — becomes a parity isolation: out of the
+    /// set, its samples judged against the others by the multi-scale
+    /// monitor, which re-admits it on the parity tests' own evidence
+    /// (issue 14, "never stuck": a frozen or silent spell that ended used
+    /// to cost the board that sensor until reset). True when it did. The
+    /// monitor calls it for the sensors it judges; the others stay latched
+    /// until reset.
+    pub fn resume(&mut self) -> bool {
+        let hardware = self.latched.is_some_and(|s| !s.is_parity_out());
+        if hardware && self.out_sample.is_some() {
+            self.latched = Some(SensorStatus::ParityIsolated);
+            return true;
+        }
+        false
+    }
+
     /// A sensor out of the set by the parity test: still checked, its
     /// usable sample kept for [`out_sample`](Self::out_sample) (the monitor
     /// judges it for re-admission, never fuses it). A hardware failure now
-    /// latches over the isolation, with that failure's policy (until
-    /// reset). Out of line: the usual sample never comes here.
+    /// latches over the isolation (judged, it becomes an isolation again
+    /// once the output is good, [`resume`](Self::resume)). Out of line: the
+    /// usual sample never comes here.
     #[inline(never)]
     fn out_of_set(
         &mut self,
@@ -229,6 +256,10 @@ impl<T: Real> SensorHealth<T> {
     /// Latches `status` (a failure) until reset.
     pub fn latch(&mut self, status: SensorStatus) {
         if status.is_failed() {
+            if !status.is_parity_out() {
+                // No sample from before the failure to resume on.
+                self.out_sample = None;
+            }
             self.latched = Some(status);
         }
     }
@@ -324,6 +355,7 @@ impl<T: Real> SensorHealth<T> {
     /// Marks the sensor railed (decided by the monitor, which sees whether
     /// the other sensors clip too).
     pub fn rail(&mut self) {
+        self.out_sample = None;
         self.latched = Some(SensorStatus::Railed);
     }
 
@@ -439,5 +471,55 @@ mod tests {
             (None, SensorStatus::InvalidOutput)
         );
         assert_eq!(h.out_sample(), None);
+    }
+
+    #[test]
+    fn a_hardware_failure_resumes_as_an_isolation_once_the_output_is_good() {
+        let cfg = HealthConfig::new(10.0_f64);
+        let mut h = SensorHealth::default();
+        for _ in 0..49 {
+            h.check(Reading::Sample(0.5), &cfg);
+        }
+        assert_eq!(h.check(Reading::Sample(0.5), &cfg).1, SensorStatus::Stuck);
+        // Still frozen: still stuck, nothing handed out, nothing to resume.
+        assert_eq!(
+            h.check(Reading::Sample(0.5), &cfg),
+            (None, SensorStatus::Stuck)
+        );
+        assert!(!h.resume());
+        assert_eq!(h.out_sample(), None);
+        // The first changed sample: still reported stuck this period and
+        // latched until reset unless resumed; resumed, out of the set as an
+        // isolation with its sample kept for the shadow.
+        assert_eq!(
+            h.check(Reading::Sample(0.6), &cfg),
+            (None, SensorStatus::Stuck)
+        );
+        assert!(!h.readmit());
+        assert!(h.resume());
+        assert_eq!(h.failure(), Some(SensorStatus::ParityIsolated));
+        assert_eq!(h.out_sample(), Some(0.6));
+        assert!(h.readmit());
+        assert_eq!(
+            h.check(Reading::Sample(0.7), &cfg),
+            (Some(0.7), SensorStatus::Healthy)
+        );
+        // A timeout: good again with the first sample, not before.
+        let mut h = SensorHealth::default();
+        for _ in 0..10 {
+            h.check(Reading::Missing, &cfg);
+        }
+        assert_eq!(h.check(Reading::Missing, &cfg).1, SensorStatus::Timeout);
+        assert!(!h.resume());
+        h.check(Reading::Sample(0.1), &cfg);
+        assert!(h.resume());
+        // An isolated sensor (its sample kept) latched by a hardware
+        // failure does not resume on that old sample.
+        let mut h = SensorHealth::default();
+        h.isolate();
+        h.check(Reading::Sample(0.2), &cfg);
+        assert_eq!(h.out_sample(), Some(0.2));
+        h.latch(SensorStatus::Timeout);
+        assert!(!h.resume());
     }
 }

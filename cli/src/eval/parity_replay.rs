@@ -154,8 +154,9 @@ pub struct ParityReplay {
     pub alarms: Vec<(f64, f64, Option<usize>)>,
     /// Isolations (sensor = 3·imu + axis, time).
     pub isolations: Vec<(usize, f64)>,
-    /// Re-admissions of parity-isolated sensors after their probation
-    /// (sensor, time).
+    /// Re-admissions after a probation (sensor, time): sensors isolated by
+    /// the multi-scale tests, or excluded by a hardware failure that ended;
+    /// sensors judged together come back at the same time.
     pub readmissions: Vec<(usize, f64)>,
     /// First time each (sensor, non-healthy status) was seen.
     pub statuses: Vec<(usize, SensorStatus, f64)>,
@@ -382,8 +383,14 @@ pub fn replay_parity_observed(
         if let Some(k) = r.isolated {
             out.isolations.push((k, *t));
         }
-        if let Some(k) = r.readmitted {
-            out.readmissions.push((k, *t));
+        if r.readmitted.is_some() {
+            // Sensors judged together (one IMU's axes failed in the same
+            // period) come back together: each one on probation until now.
+            for (k, st) in r.status.iter().enumerate() {
+                if *st == SensorStatus::Probation {
+                    out.readmissions.push((k, *t));
+                }
+            }
         }
         if out.monitoring_from.is_some() {
             edge(&mut out.alarms, r.fault, &mut was, *t, r.suspect);

@@ -100,7 +100,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let eb = (b.mm / n - mean.component_mul(&mean)).map(|v| v.max(T::zero()));
         let full_mean = b.m0.map(|m0| m0 + mean);
         self.ms_block = BlockSums::default();
-        if let Some(m) = full_mean.filter(|_| self.readmission.sensor().is_some()) {
+        if let Some(m) = full_mean.filter(|_| self.readmission.judging()) {
             // The parity-isolated sensor's shadow tests take the block too.
             self.shadow_block(&m, &eb);
         }

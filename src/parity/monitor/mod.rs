@@ -372,7 +372,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         let staged = !self.configured();
         self.advance_reconfig(false);
         self.multiscale_advance(false);
-        if self.readmission.sensor().is_some() {
+        if self.readmission.judging() {
             self.shadow_step(&mut m);
         }
         let all_active_usable = self
@@ -438,7 +438,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// the sensors in the set clip (common-mode saturation).
     #[inline(never)]
     fn screen_failures(&mut self, status: &mut [SensorStatus; N]) -> bool {
-        let mut newly_failed = None;
+        let mut newly_failed = [false; N];
         let in_set = self.removed.iter().filter(|r| !**r).count();
         // Bus, timing or output failures on at least half of the sensors in
         // the set at once (the shared bus, the power, the scheduler) are
@@ -461,7 +461,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
                 Some(t) if common_bus => *st = t,
                 _ => {
                     h.latch(*st);
-                    newly_failed = newly_failed.or(Some(k));
+                    readmit::mark(&mut newly_failed, k);
                 }
             }
         }
@@ -478,11 +478,11 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             {
                 h.rail();
                 *st = SensorStatus::Railed;
-                newly_failed = newly_failed.or(Some(k));
+                readmit::mark(&mut newly_failed, k);
             }
         }
-        if let Some(k) = newly_failed {
-            self.exclude(k);
+        if newly_failed.contains(&true) {
+            self.exclude_failed(&newly_failed);
         }
         // A failed sensor stays failed even if another one failed first.
         for k in 0..N {
@@ -531,7 +531,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         // A reconfiguration still in progress ends first (a second
         // failure within its few steps).
         self.advance_reconfig(true);
-        if self.readmission.sensor().is_some_and(|j| j != k) {
+        if self.readmission.judging() && !self.readmission.judges(k) {
             // The shadow's space holds the sensor leaving now.
             self.drop_shadow();
         }

@@ -1,6 +1,7 @@
-//! Re-admission of a sensor isolated by the multi-scale tests, once its
-//! error has decayed ("never stuck": a shock or a bus hiccup that passes
-//! the hardware checks must not cost the board its redundancy for good).
+//! Re-admission of a sensor isolated by the multi-scale tests once its
+//! error has decayed, or excluded by a hardware failure once its output is
+//! back ("never stuck": a shock or a bus hiccup must not cost the board its
+//! redundancy for good).
 //!
 //! **The statistic.** At the isolation the full set's parity space and
 //! multi-scale tests — the relative calibration, the block and window
@@ -53,20 +54,31 @@
 //! blocks, so the tests go on exactly where the shadow's decisions were.
 //! What the reduced set learned meanwhile is dropped.
 //!
-//! **Limits.** One sensor is judged at a time: a second isolation, or a
-//! hardware failure of any sensor, while one is out ends its judging (the
-//! shadow's space holds the sensor that just left), and it stays isolated
-//! until reset. Isolations by an external verdict (the rest check) and the
-//! white-noise tests' isolations stay latched until reset. Hardware
-//! failures keep their latch-until-reset policy, also when they occur on a
-//! sensor under judgement.
+//! **Hardware failures** (issue 14, "never stuck"): a sensor whose
+//! hardware check latched (frozen, silent, invalid output, railed) is
+//! judged the same way once its output is good again
+//! (`SensorHealth::resume`): the shadow is kept when it is excluded, its
+//! blocks are not judged while the failure lasts, and from the first good
+//! sample it is out of the set as an isolation, on probation and
+//! re-admitted as above. The sensors that failed in the same period (a
+//! frozen or silent IMU fails on all its axes at once) are judged and
+//! re-admitted together, each with its own isolation count. On log171 an
+//! IMU frozen for 15 s, or silent for 3 s, is back 29.5 s after its output
+//! (`cli/tests/parity_hardware_log171.rs`); one that stays frozen stays out.
+//!
+//! **Limits.** One group is judged at a time: a second isolation, or a
+//! hardware failure of another sensor, while some are out ends their
+//! judging (the shadow's space holds the sensor that just left), and they
+//! stay out until reset. Isolations by an external verdict (the rest
+//! check) and the white-noise tests' isolations and hardware failures stay
+//! latched until reset.
 
 use nalgebra::{SVector, Vector3};
 
 use crate::math::Real;
 
 use super::super::multiscale::{Outcome, REGRESSORS};
-use super::super::{ParitySpace, SensorHealth};
+use super::super::{ParitySpace, SensorHealth, SensorStatus};
 use super::flight::BlockSums;
 use super::{ParityMonitor, Reconfig};
 
@@ -84,8 +96,13 @@ pub const MAX_ISOLATIONS: u8 = 3;
 /// ≈ 20 KB per copy on the M4F.
 #[derive(Debug, Clone)]
 pub(super) struct Readmission<T: Real, const N: usize> {
-    /// The sensor judged (`None`: no shadow; the fields below are unused).
-    sensor: Option<usize>,
+    /// The sensors judged, one bit each (none: no shadow; the fields below
+    /// are unused): the isolated one, or those whose hardware checks failed
+    /// in the same period (one IMU's axes), judged and re-admitted
+    /// together. A mask, not `[bool; N]`: a pass over N flags every step
+    /// cost the M4F ≈ 50 instructions per step. Sensors from the 33rd on
+    /// are never judged (they stay out until reset).
+    judged: u32,
     /// The full set's parity space (its tests, the shadow slot, act only
     /// on the probation).
     space: ParitySpace<T, N>,
@@ -113,7 +130,7 @@ impl<T: Real, const N: usize> Readmission<T, N> {
     /// No sensor judged; `space` only fills the idle storage.
     pub(super) fn new(space: ParitySpace<T, N>) -> Self {
         Self {
-            sensor: None,
+            judged: 0,
             space,
             copy: false,
             prev: None,
@@ -125,9 +142,19 @@ impl<T: Real, const N: usize> Readmission<T, N> {
         }
     }
 
-    /// The sensor judged, if any.
-    pub(super) fn sensor(&self) -> Option<usize> {
-        self.sensor
+    /// Some sensor is judged.
+    pub(super) fn judging(&self) -> bool {
+        self.judged != 0
+    }
+
+    /// Sensor `k` is judged.
+    pub(super) fn judges(&self, k: usize) -> bool {
+        bit(k) & self.judged != 0
+    }
+
+    /// The sensors judged.
+    fn judged(&self) -> impl Iterator<Item = usize> {
+        sensors(self.judged)
     }
 
     /// The monitor's learning is still to be copied into the shadow.
@@ -162,12 +189,52 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         }
         r.copy = true;
         r.needed = (2 * u32::from(ms.longest())) << count.saturating_sub(1);
-        r.sensor = Some(k);
+        r.judged = bit(k);
         r.space = self.space;
         r.prev = self.ms_prev;
         r.prev2 = self.ms_prev2;
         r.gap = false;
         r.quiet = 0;
+    }
+
+    /// Excludes the sensors whose hardware checks failed this period;
+    /// with the multi-scale tests they are judged together for
+    /// re-admission once their output is good again, as after a parity
+    /// isolation (a frozen or silent IMU fails on all its axes at once).
+    /// Out of line: rare.
+    #[inline(never)]
+    pub(super) fn exclude_failed(&mut self, failed: &[bool; N]) {
+        let mut first = true;
+        for k in (0..N).filter(|k| failed.get(*k) == Some(&true)) {
+            if self.ms.is_some() {
+                if first {
+                    self.start_shadow(k);
+                } else {
+                    self.judge_also(k);
+                }
+            }
+            first = false;
+        }
+        for k in (0..N).filter(|k| failed.get(*k) == Some(&true)) {
+            self.exclude(k);
+        }
+    }
+
+    /// Adds sensor `k` to the sensors judged by a shadow started in this
+    /// period (its learning not yet copied: still the full set's), with its
+    /// own isolation count.
+    fn judge_also(&mut self, k: usize) {
+        let longest = self.ms.live().map_or(0, |ms| u32::from(ms.longest()));
+        let r = &mut self.readmission;
+        let Some(count) = r.isolations.get_mut(k) else {
+            return;
+        };
+        *count = count.saturating_add(1);
+        if !r.copy || *count >= MAX_ISOLATIONS {
+            return;
+        }
+        r.judged |= bit(k);
+        r.needed = r.needed.max((2 * longest) << count.saturating_sub(1));
     }
 
     /// The monitor's learning into the shadow, if still to be copied: a
@@ -177,7 +244,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     #[inline(never)]
     pub(super) fn copy_shadow(&mut self) {
         let r = &mut self.readmission;
-        if !core::mem::take(&mut r.copy) || r.sensor.is_none() {
+        if !core::mem::take(&mut r.copy) || !r.judging() {
             return;
         }
         if let Some((ms, shadow)) = self.ms.split_mut() {
@@ -185,10 +252,10 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         }
     }
 
-    /// Ends the judging of the sensor under probation (it stays isolated).
+    /// Ends the judging of the sensors under probation (they stay out).
     pub(super) fn drop_shadow(&mut self) {
         self.readmission.copy = false;
-        if let Some(k) = self.readmission.sensor.take() {
+        for k in sensors(core::mem::take(&mut self.readmission.judged)) {
             if let Some(h) = self.health.get_mut(k) {
                 h.set_probation(false);
             }
@@ -199,15 +266,27 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// variances) into the shadow: finishes its previous decision and
     /// starts this block's predecessor, as the monitor does.
     pub(super) fn shadow_block(&mut self, mean: &SVector<T, N>, e: &SVector<T, N>) {
-        let Some(k) = self.readmission.sensor else {
+        if !self.readmission.judging() {
             return;
-        };
-        let failed = self.health.get(k).and_then(|h| h.failure());
-        if !failed.is_some_and(|s| s.is_parity_out()) {
-            // A hardware failure latched over the isolation: no more
-            // judging.
-            self.readmission.sensor = None;
+        }
+        let failures = self
+            .readmission
+            .judged()
+            .map(|k| self.health.get(k).and_then(|h| h.failure()));
+        let (mut back, mut hardware) = (false, false);
+        for f in failures {
+            back |= f.is_none();
+            hardware |= f.is_some_and(|s| !s.is_parity_out());
+        }
+        if back {
+            self.drop_shadow();
             return;
+        }
+        if hardware {
+            // A hardware failure (at the exclusion or latched over the
+            // isolation): the block is not judged, the probation starts
+            // again once the output is good (`SensorHealth::resume`).
+            self.readmission.gap = true;
         }
         // A block closed before the copy stage (it runs first, then the
         // learning is carried: the copy is still the isolation's).
@@ -227,9 +306,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             r.quiet = 0;
             r.prev = None;
             r.prev2 = None;
-            if let Some(h) = self.health.get_mut(k) {
-                h.set_probation(false);
-            }
+            self.set_probation(false);
             return;
         }
         let (p, x) = (r.space.v() * mean, r.space.lsq() * mean);
@@ -252,15 +329,19 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// Out of line: most steps have no shadow.
     #[inline(never)]
     pub(super) fn shadow_step(&mut self, m: &mut SVector<T, N>) {
-        let Some(k) = self.readmission.sensor else {
-            return;
-        };
-        match (
-            self.health.get(k).and_then(SensorHealth::out_sample),
-            m.get_mut(k),
-        ) {
-            (Some(v), Some(slot)) => *slot = v,
-            _ => self.readmission.gap = true,
+        for k in sensors(self.readmission.judged) {
+            // A hardware failure whose output is good again: judged from
+            // this sample on.
+            if let Some(h) = self.health.get_mut(k) {
+                h.resume();
+            }
+            match (
+                self.health.get(k).and_then(SensorHealth::out_sample),
+                m.get_mut(k),
+            ) {
+                (Some(v), Some(slot)) => *slot = v,
+                _ => self.readmission.gap = true,
+            }
         }
         let r = &mut self.readmission;
         // Before the copy the shadow's tests are stale; the copy has
@@ -272,7 +353,7 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             }
         }
         let r = &self.readmission;
-        let ready = r.sensor.is_some() && r.quiet >= r.needed;
+        let ready = r.judging() && r.quiet >= r.needed;
         let idle = self.configured() && self.ms.live().is_none_or(|ms| ms.pending().is_none());
         if ready && idle {
             self.readmit();
@@ -283,9 +364,9 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     fn shadow_outcome(&mut self, o: Outcome<T>) {
         let full = self.ms.shadow().is_some_and(|ms| ms.windows_full());
         let r = &mut self.readmission;
-        let Some(k) = r.sensor else {
+        if !r.judging() {
             return;
-        };
+        }
         let quiet = match o {
             Outcome::Busy | Outcome::Trained(_) => return,
             // Decisions count once every window length has a score.
@@ -300,8 +381,15 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         };
         r.quiet = if quiet { r.quiet.saturating_add(1) } else { 0 };
         let on = r.quiet > 0;
-        if let Some(h) = self.health.get_mut(k) {
-            h.set_probation(on);
+        self.set_probation(on);
+    }
+
+    /// The judged sensors on probation (`true`) or back to isolated.
+    fn set_probation(&mut self, on: bool) {
+        for k in sensors(self.readmission.judged) {
+            if let Some(h) = self.health.get_mut(k) {
+                h.set_probation(on);
+            }
         }
     }
 
@@ -309,17 +397,23 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
     /// (their slot made the live one, nothing moved; the reduced set's
     /// tests are dropped).
     fn readmit(&mut self) {
-        let Some(k) = self.readmission.sensor.take() else {
-            return;
-        };
-        if !self.ms.is_some() {
+        let r = &self.readmission;
+        let out = r.judged().all(|k| {
+            self.health
+                .get(k)
+                .and_then(SensorHealth::failure)
+                .is_some_and(SensorStatus::is_parity_out)
+        });
+        let first = r.judged().next();
+        let judged = core::mem::take(&mut self.readmission.judged);
+        if !out || !self.ms.is_some() {
             return;
         }
-        if !self.health.get_mut(k).is_some_and(|h| h.readmit()) {
-            return;
-        }
-        if let Some(r) = self.removed.get_mut(k) {
-            *r = false;
+        for k in sensors(judged) {
+            if let (Some(h), Some(r)) = (self.health.get_mut(k), self.removed.get_mut(k)) {
+                h.readmit();
+                *r = false;
+            }
         }
         self.ms.flip();
         self.reconfig = Reconfig::Idle;
@@ -338,6 +432,32 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         self.ms_hold = 0;
         self.ms_above = 0;
         self.suspect_run = (None, 0);
-        self.last.readmitted = Some(k);
+        self.last.readmitted = first;
     }
+}
+
+/// Marks sensor `k` in a set of sensors.
+pub(super) fn mark<const N: usize>(mask: &mut [bool; N], k: usize) {
+    if let Some(b) = mask.get_mut(k) {
+        *b = true;
+    }
+}
+
+/// Sensor `k`'s bit in a mask of judged sensors (none from the 33rd on).
+fn bit(k: usize) -> u32 {
+    u32::try_from(k)
+        .ok()
+        .and_then(|b| 1u32.checked_shl(b))
+        .unwrap_or(0)
+}
+
+/// The sensors of a mask, lowest first.
+fn sensors(mut mask: u32) -> impl Iterator<Item = usize> {
+    core::iter::from_fn(move || {
+        let k = usize::try_from(mask.trailing_zeros())
+            .ok()
+            .filter(|_| mask != 0)?;
+        mask &= mask.wrapping_sub(1);
+        Some(k)
+    })
 }
