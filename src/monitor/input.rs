@@ -54,6 +54,50 @@ pub(crate) fn check_period<T: Real>(dt: T, period: T) -> Period<T> {
     }
 }
 
+/// The time an IMU gave its monitor's filter nothing to follow: periods
+/// beyond what the prediction bridged (a dropout: the next sample carries
+/// the time) and samples not usable (invalid, frozen), where the filter
+/// dead-reckoned on the last good one. After a gap longer than five nominal
+/// periods the state has missed that much motion, and the windows of the
+/// statistics and block tests span samples that were never integrated: the
+/// monitor holds its statistics as after an aiding loss, instead of
+/// flagging what the gap did (on log171 2 s of IMU rows cut in flight
+/// flagged a_x, g_y and g_z of every IMU for 3–6 s).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct ImuGap<T> {
+    missed: T,
+}
+
+impl<T: Real> ImuGap<T> {
+    /// One period: `dt` measured, `bridged` the period the prediction
+    /// used (`None`: not predicted), `usable` this sample. True when the
+    /// IMU is back after a gap longer than five nominal `period`s.
+    pub(crate) fn back_after_gap(
+        &mut self,
+        dt: T,
+        bridged: Option<T>,
+        usable: bool,
+        period: T,
+    ) -> bool {
+        let dt = if dt.finite() && dt > T::zero() {
+            dt
+        } else {
+            T::zero()
+        };
+        let followed = match bridged {
+            Some(b) if usable => b,
+            _ => T::zero(),
+        };
+        self.missed += (dt - followed).fmax(T::zero());
+        if !usable {
+            return false;
+        }
+        let gap = self.missed > period * T::lit(MAX_PERIOD_FACTOR);
+        self.missed = T::zero();
+        gap
+    }
+}
+
 /// The aiding channels that arrived with a finite value.
 pub(crate) fn usable_aiding<T: Real>(aiding: &Measurement<T>) -> [bool; NZ] {
     let mut available = aiding.available;

@@ -7,7 +7,7 @@ use nalgebra::Vector3;
 use super::align::align_state;
 use super::input::{
     aiding_in_range, check_period, in_range, lever_arm_rates, next_phase, saturated, usable_aiding,
-    FrozenCheck, Period,
+    FrozenCheck, ImuGap, Period,
 };
 use super::realign::AidingTrack;
 use super::{ChannelState, ConfigError, Health, OtsukfDetail, OtsukfReport, Phase};
@@ -23,6 +23,7 @@ mod block_tests;
 #[cfg(not(any(feature = "attitude-rate-test", feature = "velocity-increment-test")))]
 mod block_tests_off;
 mod config;
+mod imu_gap;
 mod inflation;
 mod recover;
 mod velocity_lag;
@@ -66,6 +67,10 @@ pub struct OtsukfMonitor<T> {
     track: AidingTrack<T>,
     /// Repeated samples (frozen output).
     frozen: FrozenCheck<T>,
+    /// Time the IMU gave the filter nothing to follow (`ImuGap`), and
+    /// the triads (velocity, attitude) to re-align after a gap (`imu_gap.rs`).
+    imu_gap: ImuGap<T>,
+    gap_realign: [bool; 2],
     /// Time left during which nothing is learned and no new fault is
     /// declared: after an unusable or saturated sample, a re-alignment.
     holdoff: T,
@@ -122,6 +127,8 @@ impl<T: Real> OtsukfMonitor<T> {
             boost: ImuVec::zeros(),
             track: AidingTrack::new(),
             frozen: FrozenCheck::new(),
+            imu_gap: ImuGap::default(),
+            gap_realign: [false; 2],
             holdoff: T::zero(),
             inflation: Inflation::new(),
             vel_lag: VelocityLag::new(),
@@ -181,6 +188,14 @@ impl<T: Real> OtsukfMonitor<T> {
         if !usable || health.saturated {
             self.holdoff = self.holdoff.max(T::lit(INPUT_HOLDOFF_S));
         }
+        let bridged = if dt_ok { Some(dt) } else { None };
+        if cfg!(feature = "imu-gap-recovery")
+            && self
+                .imu_gap
+                .back_after_gap(dt, bridged, usable, b.imu_period)
+        {
+            self.hold_after_gap();
+        }
         // Through an invalid or frozen sample the last good one stands in
         // (as in the innovation monitor): the state keeps moving with the
         // vehicle instead of freezing.
@@ -221,7 +236,16 @@ impl<T: Real> OtsukfMonitor<T> {
             // The velocity brought to now before anything compares it with
             // the state: re-aligned to its late value in every turn, the
             // state would be pulled back by the lag it compensates.
-            let present = self.bring_velocity_forward(aiding);
+            let mut present = self.bring_velocity_forward(aiding);
+            let after_gap = if cfg!(feature = "imu-gap-recovery") {
+                self.realign_after_gap(&present, &omega)
+            } else {
+                None
+            };
+            if let Some(rest) = after_gap {
+                health.mark_realigned(true);
+                present = rest;
+            }
             let (present, realigned) = self.realign_outliers(&present, &omega);
             if realigned {
                 health.mark_realigned(true);

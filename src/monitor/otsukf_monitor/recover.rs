@@ -128,7 +128,7 @@ impl<T: Real> OtsukfMonitor<T> {
     /// The `reset` states at `x` with their initial covariance, the others
     /// keeping their total covariance `P̄ + V P^f Vᵀ`; the fault estimate
     /// and `P^f` unchanged; decisions held for `converge_s`.
-    fn apply_realignment(&mut self, x: StateVec<T>, reset: &[bool; NX]) {
+    pub(super) fn apply_realignment(&mut self, x: StateVec<T>, reset: &[bool; NX]) {
         let b = self.cfg.base;
         let p = reset_covariance(&self.filter.state_covariance(), reset, &b.initial_sigma);
         self.filter.reset_state(x, p);

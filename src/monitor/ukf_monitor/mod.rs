@@ -1,7 +1,9 @@
 use nalgebra::Vector3;
 
 use super::align::align_state;
-use super::input::{aiding_in_range, check_period, in_range, lever_arm_rates, saturated, Period};
+use super::input::{
+    aiding_in_range, check_period, in_range, lever_arm_rates, saturated, ImuGap, Period,
+};
 use super::realign::NEVER_FUSED_S;
 use super::{ConfigError, Health, Phase, UkfMonitorConfig, UkfReport};
 use crate::detect::{
@@ -27,6 +29,7 @@ mod fault_track;
 mod filter_step;
 mod heading;
 mod history;
+mod imu_gap;
 #[cfg(feature = "inflation-tracking")]
 mod inflation_cover;
 mod phase;
@@ -115,6 +118,10 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     phase_time: T,
     prev_imu: ImuVec<T>,
     frozen_count: u16,
+    /// Time the IMU gave the filter nothing to follow (`ImuGap`), and
+    /// the triads (velocity, attitude) to re-align after a gap (`imu_gap.rs`).
+    imu_gap: ImuGap<T>,
+    gap_realign: [bool; 2],
     stats_holdoff: T,
     /// How long each channel has been flagged, s (0 when it is not).
     flagged_for: [T; NZ],
@@ -209,6 +216,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             phase_time: T::zero(),
             prev_imu: ImuVec::zeros(),
             frozen_count: 0,
+            imu_gap: ImuGap::default(),
+            gap_realign: [false; 2],
             stats_holdoff: T::zero(),
             flagged_for: [T::zero(); NZ],
             last_input_at: None,
@@ -405,6 +414,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             // innovations say nothing about the IMU until it has settled.
             self.stats_holdoff = T::lit(0.5);
         }
+        if cfg!(feature = "imu-gap-recovery")
+            && self
+                .imu_gap
+                .back_after_gap(dt, dt_use, usable, self.cfg.imu_period)
+        {
+            self.hold_after_gap();
+        }
         if let Some(dt) = dt_use {
             // Through a dropout or an invalid/frozen sample, the last good
             // sample stands in: better than freezing the state while the
@@ -439,6 +455,15 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         if meas_ok && !health.pitch_singular {
             let omega = lever_arm_rates(in_range, &(imu - self.removed_bias()));
             self.hold_after_loss(aiding);
+            let after_gap = if cfg!(feature = "imu-gap-recovery") {
+                self.realign_after_gap(aiding, &omega)
+            } else {
+                None
+            };
+            if after_gap.is_some() {
+                health.mark_realigned(true);
+            }
+            let aiding = after_gap.as_ref().unwrap_or(aiding);
             let (aiding, realigned) = self.realign_outliers(aiding, &omega);
             if realigned {
                 health.mark_realigned(true);

@@ -243,7 +243,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
 
     /// Re-initialises the `reset` states to `x` with their initial
     /// covariance, and restarts what depends on the state's history.
-    fn apply_realignment(&mut self, x: StateVec<T>, reset: &[bool; NX]) {
+    pub(super) fn apply_realignment(&mut self, x: StateVec<T>, reset: &[bool; NX]) {
         let p = reset_covariance(self.ukf.covariance(), reset, &self.cfg.initial_sigma);
         for (i, r) in reset.iter().enumerate() {
             if *r {
