@@ -12,7 +12,9 @@
 # Usage: scripts/single-imu-log171.sh [ukf|otsukf] [extra replay options]
 #   e.g. scripts/single-imu-log171.sh ukf --aiding-delay auto --heading-offset auto
 # DATA (default tests/data) and IMU_CSV (default $DATA/ap_log171_3imu.csv)
-# point it at other copies of the extracts.
+# point it at other copies of the extracts; BIN (default
+# ./target/release/imu-fdi-sim) runs another build of the tool, NOBUILD=1
+# skips the cargo build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 MON=${1:-ukf}
@@ -24,8 +26,8 @@ GYRO=$(python3 -c "import math; print(math.radians(${GYRO_DEG:-2}))")
 shift || true
 DATA=${DATA:-tests/data}
 IMU_CSV=${IMU_CSV:-$DATA/ap_log171_3imu.csv}
-BIN=./target/release/imu-fdi-sim
-cargo build -q -p imu-fdi-cli --release --bin imu-fdi-sim
+BIN=${BIN:-./target/release/imu-fdi-sim}
+[[ -n "${NOBUILD:-}" ]] || cargo build -q -p imu-fdi-cli --release --bin imu-fdi-sim
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 LOG=(replay "$IMU_CSV" --gnss "$DATA/ap_log171_gps_vel_ned.csv"

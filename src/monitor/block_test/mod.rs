@@ -160,7 +160,7 @@ const EXTERNAL_FLAG_RATIO: f64 = 1e3;
 /// Bins of the learnt blocks' motion (the feeding test's measure: mean
 /// squared rate or acceleration), half a decade each from 1e-8 up; the
 /// last is open.
-const MOTION_BINS: usize = 24;
+pub(super) const MOTION_BINS: usize = 24;
 const MOTION_LOG10_MIN: f64 = -8.0;
 
 /// The motion bin of a motion measure among `bins` half-decade bins from

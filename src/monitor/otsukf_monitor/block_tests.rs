@@ -47,6 +47,18 @@ impl<T: Real> OtsukfMonitor<T> {
         None
     }
 
+    /// The GNSS velocity's acceleration is more active than the velocity
+    /// test has learnt (`block_test/velocity_increment/aiding_cover.rs`):
+    /// the fault estimate's own test raises no new accelerometer flag then
+    /// (its σ assumes the aiding noise of the motion it has seen).
+    pub(super) fn blocks_accel_unlearnt(&self) -> bool {
+        #[cfg(feature = "velocity-increment-test")]
+        if let Some(cfg) = self.cfg.base.velocity_increment {
+            return self.vel_inc.aiding_motion_unlearnt(&cfg);
+        }
+        false
+    }
+
     /// Learning or monitoring, no hold-off: the tests integrate.
     fn blocks_live(&self) -> bool {
         matches!(self.phase, Phase::Learning | Phase::Monitoring) && self.holdoff <= T::zero()

@@ -22,6 +22,10 @@ impl<T: Real> OtsukfMonitor<T> {
 
     pub(super) fn blocks_apply(&mut self, _r: &mut OtsukfReport<T>) {}
 
+    pub(super) fn blocks_accel_unlearnt(&self) -> bool {
+        false
+    }
+
     pub(super) fn blocks_ended(&self) -> [bool; 6] {
         [false; 6]
     }

@@ -60,6 +60,10 @@ pub struct OtsukfMonitor<T> {
     /// Samples averaged into `nominal` so far during learning.
     learn_count: T,
     latched: [i8; 6],
+    /// Channels whose learnt nominal bias was beyond the turn-on bound at
+    /// monitoring start (a power-up fault, judged on the whole learning
+    /// span, not on the present motion).
+    power_up: [bool; 6],
     /// How long each channel has been latched, s (0 when it is not).
     flagged_for: [T; 6],
     boost: ImuVec<T>,
@@ -123,6 +127,7 @@ impl<T: Real> OtsukfMonitor<T> {
             nominal: ImuVec::zeros(),
             learn_count: T::zero(),
             latched: [0; 6],
+            power_up: [false; 6],
             flagged_for: [T::zero(); 6],
             boost: ImuVec::zeros(),
             track: AidingTrack::new(),
@@ -488,9 +493,11 @@ impl<T: Real> OtsukfMonitor<T> {
             Some(Phase::Monitoring) => {
                 // The turn-on bound, as the innovation monitor's: anything
                 // larger is a fault present from power-on.
-                self.nominal = self
-                    .nominal
-                    .zip_map(&b.nominal_bias_bound(), |f, m| f.max(-m).min(m));
+                let bound = b.nominal_bias_bound();
+                self.power_up = core::array::from_fn(
+                    |j| matches!((self.nominal.get(j), bound.get(j)), (Some(f), Some(m)) if f.abs() > *m),
+                );
+                self.nominal = self.nominal.zip_map(&bound, |f, m| f.max(-m).min(m));
                 self.latched = [0; 6];
                 self.phase = Phase::Monitoring;
                 // Frozen from here on: a fault cannot raise its own `R`.
@@ -510,6 +517,13 @@ impl<T: Real> OtsukfMonitor<T> {
         let f = self.filter.fault() - self.nominal;
         let pf = self.filter.fault_covariance();
         let hold = self.cfg.adapt_hold_s;
+        // No new accelerometer flag while the GNSS velocity's acceleration
+        // is beyond what the flight has shown healthy (`block_tests.rs`):
+        // log171's hardest turn otherwise flagged a_y on every IMU. A
+        // power-up fault rests on the learning span's mean, not on the
+        // present motion: it is reported at once (log171 from 100 s: 2 s
+        // later otherwise).
+        let accel_open = !self.blocks_accel_unlearnt();
         for ((j, l), bst) in self
             .latched
             .iter_mut()
@@ -529,7 +543,8 @@ impl<T: Real> OtsukfMonitor<T> {
                 *bst = hold;
             }
             if *l == 0 {
-                if may_raise && mag >= self.cfg.k_on * sigma && mag >= min {
+                let open = j >= 3 || accel_open || self.power_up.get(j).copied().unwrap_or(false);
+                if may_raise && open && mag >= self.cfg.k_on * sigma && mag >= min {
                     *l = if fj > T::zero() { 1 } else { -1 };
                 }
             } else if mag < self.cfg.k_off * sigma

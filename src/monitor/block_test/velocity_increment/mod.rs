@@ -58,8 +58,11 @@ use crate::math::{try_inverse, Real};
 use crate::model::{ImuVec, Measurement};
 use crate::monitor::{UkfMonitorConfig, VelocityIncrementConfig};
 
+mod aiding_cover;
 #[cfg(test)]
 mod tests;
+
+use aiding_cover::AidingCover;
 
 /// IMU samples kept for the lags (0.8 s at up to 160 Hz).
 const DELAY_RING: usize = 128;
@@ -129,6 +132,11 @@ pub(in crate::monitor) struct VelocityIncrement<T> {
     lag: usize,
     /// Gravity (NED down), m/s².
     gravity: T,
+    /// The GNSS velocity's own acceleration and how much of it was learnt
+    /// (`aiding_cover.rs`).
+    cover: AidingCover<T>,
+    /// A monitor flag was up during the open block.
+    block_external: bool,
     /// Blocks, windows, learning and decisions.
     pub(in crate::monitor) test: BlockTest<T>,
 }
@@ -166,6 +174,8 @@ impl<T: Real> VelocityIncrement<T> {
             diff_n: T::zero(),
             lag: 0,
             gravity,
+            cover: AidingCover::new(),
+            block_external: false,
             test: BlockTest::new(alpha),
         }
     }
@@ -179,6 +189,16 @@ impl<T: Real> VelocityIncrement<T> {
     pub fn reset(&mut self) {
         self.clear_windows();
         self.test.reset();
+        self.cover = AidingCover::new();
+    }
+
+    /// The GNSS velocity's acceleration over the newest shortest window of
+    /// `cfg` is more active than one longest window of the blocks learnt
+    /// (`aiding_cover.rs`): the aiding's errors at that motion are unknown.
+    pub fn aiding_motion_unlearnt(&self, cfg: &VelocityIncrementConfig<T>) -> bool {
+        let [shortest, .., longest] = cfg.lengths;
+        self.cover
+            .unlearnt(usize::from(shortest), T::lit(f64::from(longest)))
     }
 
     /// Forgets the ring, the interval, the open block and the decisions (a
@@ -187,6 +207,7 @@ impl<T: Real> VelocityIncrement<T> {
         self.invalidate();
         self.attitude = None;
         self.test.clear_windows();
+        self.cover.clear_windows();
     }
 
     /// Drops the ring, the interval under way and the open block.
@@ -198,6 +219,8 @@ impl<T: Real> VelocityIncrement<T> {
         self.block_dt = T::zero();
         self.block_motion = T::zero();
         self.last = [None; LAGS];
+        self.block_external = false;
+        self.cover.drop_block();
     }
 
     /// Drops the interval under way: the next velocity epoch only sets the
@@ -273,6 +296,7 @@ impl<T: Real> VelocityIncrement<T> {
         external: bool,
     ) {
         self.test.mark_external(external);
+        self.block_external |= external;
         let interval = self.interval;
         if let Some(v0) = self.reference {
             if self.complete && interval > T::zero() && interval <= max_interval {
@@ -288,6 +312,7 @@ impl<T: Real> VelocityIncrement<T> {
                 }
                 self.block_dt += interval;
                 self.block_motion += self.acc.first().map_or(T::zero(), |a| a.motion);
+                self.cover.interval(dv.norm_squared(), interval);
             }
         }
         self.drop_interval();
@@ -319,11 +344,18 @@ impl<T: Real> VelocityIncrement<T> {
         self.block_m = [Matrix3::zeros(); LAGS];
         self.block_dt = T::zero();
         self.block_motion = T::zero();
+        let external = core::mem::take(&mut self.block_external);
+        let keep = T::one() - T::one() / cfg.memory_blocks;
         let Some(mean) = est.get(self.lag).copied().flatten() else {
             self.last = [None; LAGS];
+            self.cover.close_block(false, keep);
             return;
         };
         self.test.close_block(cfg, mean, motion, limits);
+        // The aiding's motion is learnt on the blocks the test learns from:
+        // quiet, no flag of the monitor.
+        let learn = !external && self.test.quiet(cfg.learn_below);
+        self.cover.close_block(learn, keep);
         self.learn_lag(cfg, &est);
     }
 
