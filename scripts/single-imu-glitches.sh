@@ -9,10 +9,14 @@
 # back to nominal within 5 s of the glitch's end (no flag on that IMU that
 # is not also in the fault-free replay), the worst time back, and how many
 # cascaded (a flag on another channel, or a new flag on the glitched
-# channel after the glitch ended, once it had been raised). A flag event that overlaps a fault-free
-# event of the same channel is not counted. CASES=1 lists every slow or
+# channel after the glitch ended, once it had been raised). A flag that
+# resumes after a span the monitor did not judge (`NotMonitored`: log171's
+# manoeuvres at 122 and 125 s) is one event; the last line also gives the
+# count with such a span ending a flag (the count before 27 Nov 2026). A flag
+# event that overlaps a fault-free event of the same channel is not counted. CASES=1 lists every slow or
 # cascading case. Needs python3.
-# BIN (default ./target/release/imu-fdi-sim) runs another build of the tool.
+# BIN runs another build of the tool (default: ./target/release/imu-fdi-sim,
+# built first).
 # Usage: scripts/single-imu-glitches.sh [ukf|otsukf] [extra replay options]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -20,8 +24,10 @@ MON=${1:-ukf}
 shift || true
 DATA=${DATA:-tests/data}
 IMU_CSV=${IMU_CSV:-$DATA/ap_log171_3imu.csv}
-BIN=${BIN:-./target/release/imu-fdi-sim}
-cargo build -q -p imu-fdi-cli --release --bin imu-fdi-sim
+if [ -z "${BIN:-}" ]; then
+  BIN=./target/release/imu-fdi-sim
+  cargo build -q -p imu-fdi-cli --release --bin imu-fdi-sim
+fi
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 python3 - "$BIN" "$MON" "$TMP" "$IMU_CSV" "$DATA" "${ACC_SIZES:-3 5}" \
@@ -53,8 +59,11 @@ def replay(out, faults=None, imu=0):
     return rows[0], rows[1:]
 
 
-def events(rows, imu):
-    """Flag events per channel of one IMU: list of (channel, on, off)."""
+def events(rows, imu, bridge=True):
+    """Flag events per channel of one IMU: list of (channel, on, off). With
+    `bridge`, a flag that resumes after a span the monitor did not judge
+    (`NotMonitored`, an empty cell: a manoeuvre beyond what was learnt) is
+    the same event; otherwise that span ends it."""
     pre = "" if imu == 0 else f"imu{imu}_"
     head, body = rows
     t = [float(r[0]) for r in body]
@@ -62,28 +71,46 @@ def events(rows, imu):
     for c in CH:
         j = head.index(pre + "flag_" + c)
         on = None
+        gap = None  # start of an unjudged span within an event
         for ti, r in zip(t, body):
-            fl = r[j] not in ("", "0")
+            v = r[j]
+            if bridge and v == "" and on is not None:
+                gap = ti if gap is None else gap
+                continue
+            fl = v not in ("", "0")
             if fl and on is None:
                 on = ti
+            if fl:
+                gap = None
             if not fl and on is not None:
-                ev.append((c, on, ti))
+                ev.append((c, on, ti if gap is None else gap))
                 on = None
+                gap = None
         if on is not None:
-            ev.append((c, on, math.inf))
+            ev.append((c, on, math.inf if gap is None else gap))
     return ev
 
 
 free_rows = replay(f"{TMP}/free.csv")
-free = {k: events(free_rows, k) for k in range(3)}
+free = {(k, b): events(free_rows, k, b) for k in range(3) for b in (True, False)}
 
 
-def new(e, k):
-    return not any(f[0] == e[0] and f[1] < e[2] and e[1] < f[2] for f in free[k])
+def new(e, k, b=True):
+    return not any(f[0] == e[0] and f[1] < e[2] and e[1] < f[2] for f in free[(k, b)])
+
+
+def cascades(ev, ch, end):
+    """A flag on another channel, or a new flag on the glitched channel
+    after the glitch ended, once it had been raised before."""
+    own = [e for e in ev if e[0] == CH[ch]]
+    other = [e for e in ev if e[0] != CH[ch]]
+    return bool(other) or any(e[1] > end for e in own[1:])
 
 
 groups = defaultdict(lambda: [0, 0, 0, 0, 0.0])  # n, flagged, back, cascade, worst
 slow = []
+split_cascades = 0  # counted with unjudged spans ending a flag
+other_ch = 0  # cases with a flag on another channel
 for kind, sizes in (("acc", ACC), ("gyro", GYR)):
     for size in sizes:
         for dur in DURS:
@@ -103,11 +130,11 @@ for kind, sizes in (("acc", ACC), ("gyro", GYR)):
                         end = onset + dur
                         ev = [e for e in events(rows, imu) if e[2] > onset and new(e, imu)]
                         own = [e for e in ev if e[0] == CH[ch]]
-                        other = [e for e in ev if e[0] != CH[ch]]
-                        # A new flag on the glitched channel after the
-                        # glitch ended, once it had been raised before.
-                        again = any(e[1] > end for e in own[1:])
-                        cascade = bool(other) or again
+                        cascade = cascades(ev, ch, end)
+                        split = [e for e in events(rows, imu, False)
+                                 if e[2] > onset and new(e, imu, False)]
+                        split_cascades += cascades(split, ch, end)
+                        other_ch += any(e[0] != CH[ch] for e in ev)
                         back = max([0.0] + [e[2] - end for e in ev])
                         g = groups[(kind, size, dur)]
                         g[0] += 1
@@ -129,7 +156,8 @@ for (kind, size, dur), g in groups.items():
           f"{worst:>12} {g[3]:7}")
 tot = [sum(g[i] for g in groups.values()) for i in range(4)]
 print(f"  all: {tot[2]}/{tot[0]} back to nominal within {SETTLE:g} s, "
-      f"{tot[3]} cascades, {tot[1]} flagged")
+      f"{tot[3]} cascades ({other_ch} on another channel; {split_cascades} "
+      f"if an unjudged span ends a flag), {tot[1]} flagged")
 if LIST:
     for s in slow:
         print("  slow/cascade: %s %g %gs @%g IMU%d %s back %.1f s: %s" % s)

@@ -5,6 +5,7 @@
 use crate::math::Real;
 use crate::model::{ImuVec, Measurement};
 use crate::monitor::block_test::{any_flag, merge_block_flags, EpochContext, IntervalTest};
+use crate::monitor::ukf_monitor::realign::flag_reference;
 use crate::monitor::ukf_monitor::UkfMonitor;
 use crate::monitor::{AttitudeRateDetail, Phase};
 
@@ -94,6 +95,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     pub(in crate::monitor::ukf_monitor) fn att_rate_ended(
         &self,
         flagged_for: &[T; 6],
+        raised_at: &[T; 6],
     ) -> [bool; 3] {
         let Some(cfg) = self.cfg.attitude_rate else {
             return [false; 3];
@@ -102,6 +104,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         core::array::from_fn(|c| {
             let flagged = flagged_for.get(3 + c).is_some_and(|a| *a >= span);
             let f = self.report.fault_estimate.get(3 + c).copied();
+            let f = f.map(|f| flag_reference(f, raised_at.get(3 + c).copied()));
             flagged && f.is_some_and(|f| self.att_rate.test.contradicts(c, f))
         })
     }

@@ -25,7 +25,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     #[inline(always)]
     pub(super) fn att_rate_start(&mut self) {}
     #[inline(always)]
-    pub(super) fn att_rate_ended(&self, _flagged_for: &[T; 6]) -> [bool; 3] {
+    pub(super) fn att_rate_ended(&self, _flagged_for: &[T; 6], _raised_at: &[T; 6]) -> [bool; 3] {
         [false; 3]
     }
 }

@@ -125,6 +125,9 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     stats_holdoff: T,
     /// How long each channel has been flagged, s (0 when it is not).
     flagged_for: [T; NZ],
+    /// Each flag's estimate when it was raised (0 when not flagged): what
+    /// the end-of-fault rule holds a fault still present to.
+    flag_raised_at: [T; NZ],
     /// Where the last predict's input Jacobian `B` was taken (the state
     /// before it and its attitude trigonometry): `B` is rebuilt from these
     /// when an estimate needs it, instead of a 36-value copy every IMU
@@ -220,6 +223,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             gap_realign: [false; 2],
             stats_holdoff: T::zero(),
             flagged_for: [T::zero(); NZ],
+            flag_raised_at: [T::zero(); NZ],
             last_input_at: None,
             last_h: Mat6::identity(),
             last_dt: cfg.imu_period,

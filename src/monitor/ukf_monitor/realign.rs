@@ -9,6 +9,24 @@ use crate::monitor::realign::{
 };
 use crate::monitor::ChannelState;
 
+/// The fault size the end-of-fault rule tests a flag against: the
+/// channel's estimate `f` now, or the estimate `raised` the flag was raised
+/// with when that is larger in the same sign. A block test's estimate is
+/// the mean of the window that flags, and a short glitch's mean falls as
+/// longer windows take over the flag (log171, 5 m/s² for 1 s on a_x:
+/// raised at 2.17 m/s² by the 2-s window, held at 0.41 by the 10-s one
+/// until it had flushed, 10.1 s after the glitch), below what the shortest
+/// window can contradict; a fault still present keeps the size it was
+/// raised at, so that window's rule (its threshold deviation, the test's
+/// per-decision probability under that fault) holds for it as well.
+#[cfg(any(feature = "attitude-rate-test", feature = "velocity-increment-test"))]
+pub(super) fn flag_reference<T: Real>(f: T, raised: Option<T>) -> T {
+    match raised {
+        Some(r) if r * f > T::zero() && r.abs() > f.abs() => r,
+        _ => f,
+    }
+}
+
 /// A block test is compiled in: without one (the MCU images) nothing can
 /// tell that a fault has ended, and the flag ages are not kept.
 const BLOCK_TESTS: bool =
@@ -133,8 +151,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 *a = T::zero();
             }
         }
-        let gyro = self.att_rate_ended(&flagged_for);
-        let acc = self.vel_inc_ended(&flagged_for);
+        let gyro = self.att_rate_ended(&flagged_for, &self.flag_raised_at);
+        let acc = self.vel_inc_ended(&flagged_for, &self.flag_raised_at);
         let ended: [bool; NZ] = core::array::from_fn(|j| {
             let e = if j < 3 { acc.get(j) } else { gyro.get(j - 3) };
             e.copied().unwrap_or(false)
@@ -177,17 +195,28 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     }
 
     /// Ages the flags of the report by `dt`: how long each channel has
-    /// been flagged (0 when it is not).
+    /// been flagged (0 when it is not), and the estimate each flag was
+    /// raised with (the report's, at the decision that raised it).
     pub(super) fn age_flags(&mut self, dt: T) {
         if !BLOCK_TESTS {
             return;
         }
-        for (a, s) in self.flagged_for.iter_mut().zip(self.report.status.iter()) {
-            *a = if matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative) {
-                *a + dt
+        for (((a, r), s), f) in self
+            .flagged_for
+            .iter_mut()
+            .zip(self.flag_raised_at.iter_mut())
+            .zip(self.report.status.iter())
+            .zip(self.report.fault_estimate.iter())
+        {
+            if matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative) {
+                if *a <= T::zero() {
+                    *r = *f;
+                }
+                *a += dt;
             } else {
-                T::zero()
-            };
+                *a = T::zero();
+                *r = T::zero();
+            }
         }
     }
 

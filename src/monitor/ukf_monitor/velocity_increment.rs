@@ -5,6 +5,7 @@
 use crate::math::Real;
 use crate::model::{ImuVec, Measurement};
 use crate::monitor::block_test::{any_flag, merge_block_flags, EpochContext, IntervalTest};
+use crate::monitor::ukf_monitor::realign::flag_reference;
 use crate::monitor::ukf_monitor::UkfMonitor;
 use crate::monitor::{Phase, VelocityIncrementDetail};
 
@@ -103,7 +104,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// window (`flagged_for`, s per channel) with an estimate that window
     /// contradicts (`BlockTest::contradicts`): the fault has ended, what
     /// the flag still sees is the velocity it integrated into the filter.
-    pub(in crate::monitor::ukf_monitor) fn vel_inc_ended(&self, flagged_for: &[T; 6]) -> [bool; 3] {
+    pub(in crate::monitor::ukf_monitor) fn vel_inc_ended(
+        &self,
+        flagged_for: &[T; 6],
+        raised_at: &[T; 6],
+    ) -> [bool; 3] {
         let Some(cfg) = self.cfg.velocity_increment else {
             return [false; 3];
         };
@@ -111,6 +116,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         core::array::from_fn(|c| {
             let flagged = flagged_for.get(c).is_some_and(|a| *a >= span);
             let f = self.report.fault_estimate.get(c).copied();
+            let f = f.map(|f| flag_reference(f, raised_at.get(c).copied()));
             flagged && f.is_some_and(|f| self.vel_inc.test.contradicts(c, f))
         })
     }
