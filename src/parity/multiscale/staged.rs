@@ -477,19 +477,11 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         self.covariances_changed();
         let wt = T::one() / T::lit(f64::from(self.updates)).min(self.cfg.variance_blocks);
         ewma_outer_padded(&mut self.block_cov, &r, wt, self.dim);
-        // The block's energy in block-covariance units (`gain` is `1/√ŝ` of
-        // its standardisation), clipped as the block covariance learns it:
-        // `min(norm², bound²)` is `rᵀ Σ_b⁻¹ r` of the clipped block, whose
-        // mean is `dim` exactly when `Σ_b` is the clipped blocks' mean. The
-        // raw energy averaged `1/c > 1` against it (c the clip's consistency
-        // factor), so ŝ grew by `1/c` every memory while `Σ_b` shrank by `c`
-        // with no fixed point: the gyro law reached `SCALE_MAX` within an
-        // hour of the realistic profile (docs/parity-real-flights.md).
+        // The block's raw energy in block-covariance units (`gain` is
+        // `1/√ŝ` of its standardisation).
         let dimf = T::lit(self.dim.max(1) as f64);
         let energy = T::one() / (gain * gain).max(T::lit(1e-12));
-        let bound = dimf.sqrt() + self.cfg.huber;
-        self.scale
-            .learn(level, energy * norm2.min(bound * bound) / dimf, wt);
+        self.scale.learn(level, energy * norm2 / dimf, wt);
         for (s, (cov, rbar)) in self.window_cov.iter_mut().zip(means.iter()).enumerate() {
             if set & (1 << s) != 0 {
                 ewma_outer_padded(cov, rbar, wt, self.dim);
