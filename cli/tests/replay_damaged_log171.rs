@@ -7,15 +7,18 @@
 //! (`ukf_monitor/imu_gap.rs`, `otsukf_monitor/imu_gap.rs`) and flags no
 //! channel the undamaged flight does not: before, a 2-s cut at 150 s
 //! flagged a_x, g_y and g_z of every IMU for 3–6 s (UKF monitor; 9 extra
-//! events, OTSUKF 7), a 2-s freeze a_z and g_y.
+//! events, OTSUKF 7), a 2-s freeze a_z and g_y; and with the attitude
+//! aiding's rows cut for 30 s, the velocity test (its rotation carried by
+//! the raw gyro alone) flagged a_x and a_y of every IMU from 10 s in.
 #![allow(clippy::unwrap_used, clippy::indexing_slicing)] // test code
 
 mod common;
 use common::{bin, data, tmp};
 
-/// The IMU extract with `damage` applied to the rows in `[start, end)`.
-fn damaged(tag: &str, start: f64, end: f64, cut: bool) -> std::path::PathBuf {
-    let text = std::fs::read_to_string(data("ap_log171_3imu.csv")).unwrap();
+/// The extract `file` with its rows in `[start, end)` cut (`cut`) or held
+/// at the first of them.
+fn damaged(file: &str, tag: &str, start: f64, end: f64, cut: bool) -> std::path::PathBuf {
+    let text = std::fs::read_to_string(data(file)).unwrap();
     let mut out = String::new();
     let mut held: Option<String> = None;
     for (i, line) in text.lines().enumerate() {
@@ -36,15 +39,16 @@ fn damaged(tag: &str, start: f64, end: f64, cut: bool) -> std::path::PathBuf {
     path
 }
 
-/// Flag events per channel of every IMU, replaying `imu` 80–235 s.
-fn events(imu: &std::path::Path, monitor: &str) -> Vec<u64> {
+/// Flag events per channel of every IMU, replaying `imu` with attitude
+/// aiding `att`, 80–235 s.
+fn events(imu: &std::path::Path, att: &std::path::Path, monitor: &str) -> Vec<u64> {
     let out = bin()
         .arg("replay")
         .arg(imu)
         .arg("--gnss")
         .arg(data("ap_log171_gps_vel_ned.csv"))
         .arg("--att")
-        .arg(data("ap_log171_attitude_quat.csv"))
+        .arg(att)
         .args([
             "--from",
             "80",
@@ -72,24 +76,27 @@ fn events(imu: &std::path::Path, monitor: &str) -> Vec<u64> {
 
 #[test]
 fn an_imu_dropout_or_freeze_in_flight_flags_nothing_new() {
-    // Spells not tuned on: 2 s cut at 120 s, 5 s cut at 180 s, 2 s frozen
-    // at 150 s (the sweep in docs/recovery.md covers 24 more).
+    // Spells not tuned on: IMU rows cut 2 s at 120 s and 5 s at 180 s,
+    // frozen 2 s at 150 s, attitude aiding cut 30 s at 180 s (the sweep of
+    // docs/results.md covers more).
+    let (imu, att) = ("ap_log171_3imu.csv", "ap_log171_attitude_quat.csv");
     let spells = [
-        damaged("cut120", 120.0, 122.0, true),
-        damaged("cut180", 180.0, 185.0, true),
-        damaged("frozen150", 150.0, 152.0, false),
+        (damaged(imu, "cut120", 120.0, 122.0, true), data(att)),
+        (damaged(imu, "cut180", 180.0, 185.0, true), data(att)),
+        (damaged(imu, "frozen150", 150.0, 152.0, false), data(att)),
+        (data(imu), damaged(att, "att180", 180.0, 210.0, true)),
     ];
     for monitor in ["ukf", "otsukf"] {
-        let clean = events(&data("ap_log171_3imu.csv"), monitor);
-        for path in &spells {
-            let got = events(path, monitor);
+        let clean = events(&data(imu), &data(att), monitor);
+        for (path, att) in &spells {
+            let got = events(path, att, monitor);
             let extra: Vec<_> = got
                 .iter()
                 .zip(clean.iter())
                 .enumerate()
                 .filter(|(_, (g, c))| g > c)
                 .collect();
-            assert!(extra.is_empty(), "{monitor} {path:?}: {extra:?}");
+            assert!(extra.is_empty(), "{monitor} {path:?} {att:?}: {extra:?}");
         }
     }
 }

@@ -45,8 +45,9 @@
 //! rejected it) is skipped and the IMU integrated on to the next one; an
 //! interval longer than `aiding_timeout_s`, an invalid IMU sample or held
 //! statistics drop the interval (and, for a sample, the ring: the lags
-//! resume once it has refilled). Without an attitude epoch yet there is no
-//! rotation and nothing is integrated. Not modelled: a heading offset of
+//! resume once it has refilled). Without an attitude epoch yet, or none
+//! for longer than `aiding_timeout_s` (the raw gyro does not hold the
+//! tilt that long), there is no rotation and nothing is integrated. Not modelled: a heading offset of
 //! the aiding (it turns the horizontal `Δv`, an end term over a window) and
 //! the GNSS antenna's lever arm.
 
@@ -104,6 +105,10 @@ impl<T: Real> Increment<T> {
 pub(in crate::monitor) struct VelocityIncrement<T> {
     /// The body→NED attitude: the latest aiding epoch carried on by the gyro.
     attitude: Option<UnitQuaternion<T>>,
+    /// Time since that epoch, and the age beyond which the gyro-carried
+    /// attitude is dropped (`aiding_timeout_s`).
+    attitude_age: T,
+    max_attitude_age: T,
     /// The last `DELAY_RING` increments, newest at `head − 1`.
     ring: [Increment<T>; DELAY_RING],
     head: usize,
@@ -157,6 +162,8 @@ impl<T: Real> VelocityIncrement<T> {
         }
         Self {
             attitude: None,
+            attitude_age: T::zero(),
+            max_attitude_age: T::lit(f64::INFINITY),
             ring: [Increment::zero(); DELAY_RING],
             head: 0,
             filled: 0,
@@ -236,10 +243,20 @@ impl<T: Real> VelocityIncrement<T> {
     pub fn attitude_epoch(&mut self, euler: [T; 3]) {
         let [r, p, y] = euler;
         self.attitude = Some(from_euler(r, p, y));
+        self.attitude_age = T::zero();
     }
 
     /// One raw IMU sample (specific force, rate).
     pub fn integrate(&mut self, force: &Vector3<T>, rate: &Vector3<T>, dt: T) {
+        // An attitude aiding lost beyond the timeout: the raw gyro alone
+        // does not hold the rotation (log171, attitude rows cut for 30 s:
+        // a_x and a_y flagged on every IMU from 10 s in, the gravity leaked
+        // through the gyro-carried tilt), so nothing is integrated until
+        // the next attitude epoch.
+        self.attitude_age += dt;
+        if self.attitude_age > self.max_attitude_age {
+            self.attitude = None;
+        }
         let Some(q) = self.attitude.as_mut() else {
             self.invalidate();
             return;
@@ -279,7 +296,9 @@ impl<T: Real> VelocityIncrement<T> {
     /// The test of a monitor configured with `cfg` (idle when it is off).
     pub fn for_config(cfg: &UkfMonitorConfig<T>) -> Self {
         let alpha = cfg.velocity_increment.map_or(0.0, |c| c.alpha());
-        Self::new(alpha, cfg.imu_period, cfg.gravity)
+        let mut test = Self::new(alpha, cfg.imu_period, cfg.gravity);
+        test.max_attitude_age = cfg.aiding_timeout_s;
+        test
     }
 
     /// A GNSS velocity epoch (NED, m/s) the UKF fused, closing the
