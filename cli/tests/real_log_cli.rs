@@ -93,10 +93,14 @@ fn dataflash_log_replays_every_imu_and_attributes_common_mode_flags() {
         let c = channel(&s, name);
         let flagged = c["flagged_samples"].as_u64().unwrap();
         assert!(flagged > 1000, "{c}");
-        // All of them common mode but for an instant where one IMU's test
-        // did not judge (motion beyond what its inflation was learnt at).
+        // All of them common mode but for instants where one IMU's test
+        // did not judge (motion beyond what its inflation was learnt at)
+        // or judged again later than the others after the log's 2-s IMU
+        // gap at arming (72.6 s: every monitor holds its statistics and
+        // re-aligns, `imu_gap.rs`; measured 60 samples, IMU0 back at 79.5 s
+        // unflagged for 1.2 s): at most 2 s of samples at 49 Hz.
         let common = c["common_mode_samples"].as_u64().unwrap();
-        assert!(common <= flagged && common * 100 >= flagged * 99, "{c}");
+        assert!(common <= flagged && flagged - common <= 98, "{c}");
     }
     // Learning with GPS, then faults injected on IMU 1: found on IMU 1 only.
     let faults = tmp("ap-head-faults.toml");
