@@ -140,7 +140,10 @@ impl<T: Real> OtsukfMonitor<T> {
         let att: Option<&mut crate::monitor::block_test::BlockTest<T>> = None;
         for (first, test) in [(0, vel), (3, att)] {
             if let Some(t) = test {
-                merge_block_flags(&mut r.status, &mut r.fault_estimate, first, t, false);
+                // In a hold-off the channels read `NotMonitored`; a block
+                // test's flag still shows (as before the hold-off).
+                let held = self.holdoff > T::zero();
+                merge_block_flags(&mut r.status, &mut r.fault_estimate, first, t, held);
             }
         }
     }

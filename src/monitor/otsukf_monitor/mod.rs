@@ -561,11 +561,18 @@ impl<T: Real> OtsukfMonitor<T> {
         let fault = *self.filter.fault();
         let pf = self.filter.fault_covariance();
         let px = self.filter.state_variance();
+        // In a hold-off no new fault is declared: an unflagged channel is
+        // not judged then, and says so ("never silent").
+        let unflagged = if self.holdoff > T::zero() {
+            ChannelState::NotMonitored
+        } else {
+            ChannelState::Healthy
+        };
         let status = if self.phase == Phase::Monitoring {
             self.latched.map(|l| match l {
                 1 => ChannelState::FaultPositive,
                 -1 => ChannelState::FaultNegative,
-                _ => ChannelState::Healthy,
+                _ => unflagged,
             })
         } else {
             [ChannelState::NotMonitored; 6]
