@@ -140,6 +140,52 @@ pub(crate) fn returned<T: Real>(since_fused: T, timeout: T) -> bool {
     since_fused > timeout && since_fused < T::lit(0.5 * NEVER_FUSED_S)
 }
 
+/// A re-alignment after an IMU gap (`ImuGap`): the new state, the states
+/// reset, the triads (velocity, attitude) still to re-align and the aiding
+/// left to fuse (without the re-aligned channels); `None` when `pending`
+/// is empty or this epoch completes neither triad. Both monitors'
+/// `imu_gap.rs` apply it with their own reset.
+pub(crate) fn gap_realignment<T: Real>(
+    model: &VehicleModel<T>,
+    meas: &MeasurementModel<T>,
+    x: &StateVec<T>,
+    aiding: &Measurement<T>,
+    omega: &Vector3<T>,
+    pending: [bool; 2],
+) -> Option<GapRealignment<T>> {
+    let [vel, att] = pending;
+    if !vel && !att {
+        return None;
+    }
+    let (state, reset) = realigned_state(model, meas, x, aiding, omega, att, vel);
+    if !reset.iter().any(|r| *r) {
+        return None;
+    }
+    let done = |i: usize| reset.get(i).copied().unwrap_or(false);
+    let mut rest = *aiding;
+    for (a, r) in rest.available.iter_mut().zip(reset.iter()) {
+        *a &= !*r;
+    }
+    Some(GapRealignment {
+        state,
+        reset,
+        pending: [vel && !done(0), att && !done(ROLL)],
+        rest,
+    })
+}
+
+/// What [`gap_realignment`] gives.
+pub(crate) struct GapRealignment<T: Real> {
+    /// The re-aligned state.
+    pub state: StateVec<T>,
+    /// The states re-initialised.
+    pub reset: [bool; NX],
+    /// The triads (velocity, attitude) still to re-align.
+    pub pending: [bool; 2],
+    /// The aiding left to fuse.
+    pub rest: Measurement<T>,
+}
+
 /// `x` with the attitude triad (when `att`) and the body velocity (when
 /// `vel`) re-initialised from `aiding`, and which states were. A triad is
 /// re-initialised only when complete and finite in this epoch, an

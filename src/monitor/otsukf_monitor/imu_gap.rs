@@ -7,7 +7,7 @@
 
 use nalgebra::Vector3;
 
-use super::super::realign::realigned_state;
+use super::super::realign::gap_realignment;
 use super::OtsukfMonitor;
 use crate::math::Real;
 use crate::model::{Measurement, ROLL};
@@ -34,27 +34,16 @@ impl<T: Real> OtsukfMonitor<T> {
         aiding: &Measurement<T>,
         omega: &Vector3<T>,
     ) -> Option<Measurement<T>> {
-        let [vel, att] = self.gap_realign;
-        if !vel && !att {
-            return None;
-        }
         let x = self.filter.state();
-        let (x_new, reset) = realigned_state(&self.model, &self.meas, &x, aiding, omega, att, vel);
-        if !reset.iter().any(|r| *r) {
-            return None;
-        }
-        let done = |i: usize| reset.get(i).copied().unwrap_or(false);
-        self.gap_realign = [vel && !done(0), att && !done(ROLL)];
-        self.apply_realignment(x_new, &reset);
+        let g = gap_realignment(&self.model, &self.meas, &x, aiding, omega, self.gap_realign)?;
+        self.gap_realign = g.pending;
+        self.apply_realignment(g.state, &g.reset);
         // Through a freeze the fault estimate followed the stand-in
         // sample's mismatch with the aiding: the re-aligned triad's
         // channels restart at the nominal bias (as `realign_ended`).
+        let done = |i: usize| g.reset.get(i).copied().unwrap_or(false);
         let restart: [bool; 6] = core::array::from_fn(|j| done(if j < 3 { 0 } else { ROLL }));
         self.filter.reset_faults(&restart, &self.nominal);
-        let mut out = *aiding;
-        for (a, r) in out.available.iter_mut().zip(reset.iter()) {
-            *a &= !*r;
-        }
-        Some(out)
+        Some(g.rest)
     }
 }

@@ -11,10 +11,10 @@
 
 use nalgebra::Vector3;
 
-use super::super::realign::realigned_state;
+use super::super::realign::gap_realignment;
 use super::UkfMonitor;
 use crate::math::Real;
-use crate::model::{Measurement, ROLL};
+use crate::model::Measurement;
 use crate::monitor::Phase;
 
 impl<T: Real, const W: usize> UkfMonitor<T, W> {
@@ -42,22 +42,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         aiding: &Measurement<T>,
         omega: &Vector3<T>,
     ) -> Option<Measurement<T>> {
-        let [vel, att] = self.gap_realign;
-        if !vel && !att {
-            return None;
-        }
         let x = *self.ukf.state();
-        let (x_new, reset) = realigned_state(&self.model, &self.meas, &x, aiding, omega, att, vel);
-        if !reset.iter().any(|r| *r) {
-            return None;
-        }
-        let done = |i: usize| reset.get(i).copied().unwrap_or(false);
-        self.gap_realign = [vel && !done(0), att && !done(ROLL)];
-        self.apply_realignment(x_new, &reset);
-        let mut out = *aiding;
-        for (a, r) in out.available.iter_mut().zip(reset.iter()) {
-            *a &= !*r;
-        }
-        Some(out)
+        let g = gap_realignment(&self.model, &self.meas, &x, aiding, omega, self.gap_realign)?;
+        self.gap_realign = g.pending;
+        self.apply_realignment(g.state, &g.reset);
+        Some(g.rest)
     }
 }
