@@ -8,6 +8,7 @@
 pub mod array_run;
 pub mod array_sweep;
 pub mod campaign;
+mod dataflash_imus;
 pub mod gnss_lag;
 pub mod inject;
 pub mod parity_campaign;
