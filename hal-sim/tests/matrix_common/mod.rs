@@ -1,0 +1,27 @@
+//! What both recovery matrices (`recovery_matrix.rs`, single IMU, and
+//! `recovery_matrix_parity.rs`, redundant arrays) share: seeds, the
+//! settling and verdict windows of issue 16, and the printed table row.
+
+/// Seeds per cell.
+pub const SEEDS: u64 = 3;
+/// Valid input before the verdict, s (issue 16).
+pub const SETTLE_S: f64 = 10.0;
+/// Verdict window after it, s.
+pub const CHECK_S: f64 = 5.0;
+
+/// A run's verdict: nominal, or when (s after the last bad sample) and why
+/// it was first off nominal in the verdict window.
+pub type Outcome = Result<(), (f64, &'static str)>;
+
+/// Prints one table row (runs back to nominal, the first failure) and
+/// returns how many runs failed.
+pub fn row(name: &str, outcomes: &[Outcome]) -> usize {
+    let ok = outcomes.iter().filter(|o| o.is_ok()).count();
+    let first = outcomes.iter().find_map(|o| o.err());
+    println!(
+        "| {name:<34} | {ok}/{} | {} |",
+        outcomes.len(),
+        first.map_or(String::from("—"), |(t, w)| format!("{w} at +{t:.1} s")),
+    );
+    outcomes.len() - ok
+}
