@@ -44,11 +44,14 @@ enum ParityClass {
     /// Every sensor NaN for 20 samples at once (beyond the invalid-output
     /// limit on every sensor).
     CommonModeNanLong,
+    /// Every sensor's output frozen for 1 s at once (the logger or the
+    /// driver repeating its last sample): a common-mode event, not latched.
+    CommonModeStuck,
     /// Nothing injected: the control.
     None,
 }
 
-const PARITY_CLASSES: [ParityClass; 12] = [
+const PARITY_CLASSES: [ParityClass; 13] = [
     ParityClass::None,
     ParityClass::NanShort,
     ParityClass::NanLong,
@@ -61,6 +64,7 @@ const PARITY_CLASSES: [ParityClass; 12] = [
     ParityClass::BusErrorShort,
     ParityClass::CommonModeNan,
     ParityClass::CommonModeNanLong,
+    ParityClass::CommonModeStuck,
 ];
 
 const PARITY_SENSOR: usize = 2;
@@ -99,6 +103,7 @@ fn parity_steps(
         ParityClass::DropoutLong => (100, true),
         ParityClass::CommonModeNan => (3, false),
         ParityClass::CommonModeNanLong => (20, false),
+        ParityClass::CommonModeStuck => (100, false),
         ParityClass::None => (0, false),
     };
     let end = fault_at + f64::from(samples) / 100.0;
@@ -123,6 +128,7 @@ fn parity_steps(
     let mut latched = [false; 6];
     latched[PARITY_SENSOR] = latches;
     let mut frozen = None;
+    let mut frozen_all = None;
     let mut out = Vec::new();
     for s in sim {
         let mut readings = s.readings.map(|r| r.map(|v| v as f32));
@@ -143,15 +149,19 @@ fn parity_steps(
                 ParityClass::SaturatedLong => Reading::Sample(fs),
                 ParityClass::DropoutShort | ParityClass::DropoutLong => Reading::Missing,
                 ParityClass::BusErrorShort => Reading::BusError,
-                ParityClass::CommonModeNan | ParityClass::CommonModeNanLong | ParityClass::None => {
-                    Reading::Sample(f32::NAN)
-                }
+                ParityClass::CommonModeNan
+                | ParityClass::CommonModeNanLong
+                | ParityClass::CommonModeStuck
+                | ParityClass::None => Reading::Sample(f32::NAN),
             };
             if matches!(
                 class,
                 ParityClass::CommonModeNan | ParityClass::CommonModeNanLong
             ) {
                 readings = [Reading::Sample(f32::NAN); 6];
+            }
+            if class == ParityClass::CommonModeStuck {
+                readings = *frozen_all.get_or_insert(s.readings.map(|r| r.map(|v| v as f32)));
             }
         }
         let r = m.step(&readings);
@@ -195,6 +205,17 @@ fn parity_run(
     (Ok(()), control_alarm)
 }
 
+/// Cells known not to recover, with the reason (`docs/recovery.md`):
+/// printed, not counted; one that recovers fails the test, so the list
+/// cannot go stale. `true` is the multi-scale monitor.
+const PARITY_OPEN: [(bool, ParityClass, &str); 1] = [(
+    false,
+    ParityClass::CommonModeStuck,
+    "the white-noise tests see the repeated samples before the freeze is \
+     recognised (50 samples) and may isolate on them (seed 3: sensor 2 at \
+     0.42 s), a latch until reset for these tests",
+)];
+
 #[test]
 fn parity_monitor_recovers_from_every_class() {
     let mut failed = 0;
@@ -213,7 +234,26 @@ fn parity_monitor_recovers_from_every_class() {
             } else {
                 String::new()
             };
-            failed += row(&format!("{class:?}{note}"), &outcomes);
+            let open = PARITY_OPEN
+                .iter()
+                .find(|(f, c, _)| *f == flight && *c == class);
+            let f = row(
+                &format!(
+                    "{class:?}{note}{}",
+                    if open.is_some() { " (open)" } else { "" }
+                ),
+                &outcomes,
+            );
+            match open {
+                Some((.., why)) => {
+                    println!("  open: {why}");
+                    assert!(
+                        f > 0,
+                        "{name} {class:?} recovers now: remove it from PARITY_OPEN"
+                    );
+                }
+                None => failed += f,
+            }
         }
     }
     println!(
@@ -282,5 +322,69 @@ fn parity_monitor_readmits_a_sensor_once_its_hardware_failure_ended() {
             backs.push(format!("{t_back:.2}"));
         }
         println!("| {class:?} | {} |", backs.join(", "));
+    }
+}
+
+/// A sensor whose hardware check failed while the multi-scale tests were
+/// still training comes back once its output is good: training starts
+/// over with the full set, so monitoring begins with every sensor (a
+/// frozen spell during training used to cost the sensor for good, and with
+/// it the isolation). One that fails `MAX_ISOLATIONS` times stays out.
+#[test]
+fn parity_monitor_takes_back_a_sensor_that_failed_while_training() {
+    for (freezes, back) in [(1, true), (2, true), (3, false)] {
+        let spec = ArraySpec::fault_free(
+            "cone6",
+            cone6_directions(),
+            ArrayKind::Gyro,
+            Layout::Single,
+            30.0,
+        );
+        let sim = ArraySim::new(&spec, 7);
+        let fs = spec.errors.full_scale as f32;
+        let dirs = spec.directions.map(|d| d.map(|v| v as f32));
+        let geometry = Geometry::<f32, 6>::new(&dirs).unwrap();
+        let mut cfg = ParityConfig::<f32>::gyro_flight(100.0, fs);
+        cfg.set_lead_in(sim.lead_in_samples());
+        let mut m = ParityMonitor::<f32, 6, 40>::new(&geometry, cfg).unwrap();
+        let mut frozen = None;
+        let (mut monitoring, mut alarms, mut last) = (None, 0, None);
+        for (i, s) in sim.enumerate() {
+            let mut readings = s.readings.map(|r| r.map(|v| v as f32));
+            // 1-s freezes of sensor 2, 5 s apart, from 10 s into training.
+            let in_freeze = (0..freezes).any(|f| (1000 + 500 * f..1100 + 500 * f).contains(&i));
+            if in_freeze {
+                readings[PARITY_SENSOR] =
+                    Reading::Sample(*frozen.get_or_insert(match readings[PARITY_SENSOR] {
+                        Reading::Sample(v) => v,
+                        _ => 0.0,
+                    }));
+                assert_eq!(m.phase(), imu_fdi::parity::ParityPhase::Training);
+            } else {
+                frozen = None;
+            }
+            let r = m.step(&readings);
+            if monitoring.is_none() && r.phase == imu_fdi::parity::ParityPhase::Monitoring {
+                monitoring = Some(s.t);
+            }
+            alarms += usize::from(monitoring.is_some() && r.fault);
+            last = Some(r);
+        }
+        let r = last.unwrap();
+        assert!(monitoring.is_some(), "{freezes} freezes: never monitoring");
+        assert_eq!(alarms, 0, "{freezes} freezes: alarm steps");
+        if back {
+            assert_eq!(r.status[PARITY_SENSOR], SensorStatus::Healthy, "{freezes}");
+            assert_eq!(r.parity_dim, 3, "{freezes} freezes: full set");
+        } else {
+            assert_eq!(r.status[PARITY_SENSOR], SensorStatus::Stuck, "{freezes}");
+            assert_eq!(r.parity_dim, 2, "{freezes} freezes: sensor out");
+        }
+        println!(
+            "{freezes} freeze(s) in training: monitoring from {:.2} s, sensor {PARITY_SENSOR} {:?}, parity dim {}",
+            monitoring.unwrap(),
+            r.status[PARITY_SENSOR],
+            r.parity_dim
+        );
     }
 }

@@ -46,7 +46,11 @@ pub enum SensorStatus {
     /// Failed: identical output for `stuck_samples` periods. This and the
     /// failures below latch until reset, except with the multi-scale
     /// monitor, which judges the sensor for re-admission once its output
-    /// is good again (then [`ParityIsolated`](Self::ParityIsolated)).
+    /// is good again (then [`ParityIsolated`](Self::ParityIsolated)), or
+    /// takes it back and trains again if it failed while training. Output
+    /// frozen on at least half of the sensors in the same period is a
+    /// common-mode event (the logger or the driver repeating a sample):
+    /// reported `Stuck` while it lasts, the samples unused, not latched.
     Stuck,
     /// Failed: no sample for `timeout_samples` periods.
     Timeout,
@@ -345,6 +349,12 @@ impl<T: Real> SensorHealth<T> {
             return true;
         }
         false
+    }
+
+    /// Consecutive repeats of the same sample so far (N identical samples
+    /// are N − 1 repeats).
+    pub fn repeats(&self) -> u16 {
+        self.same
     }
 
     /// Consecutive clipping samples so far.

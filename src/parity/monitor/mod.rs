@@ -20,6 +20,8 @@ mod flight;
 mod fusion;
 mod readmit;
 mod reconfig;
+mod retrain;
+mod screen;
 mod slots;
 mod white;
 
@@ -375,6 +377,9 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
         if self.readmission.judging() {
             self.shadow_step(&mut m);
         }
+        if self.training_without_some() {
+            self.retrain_if_resumed();
+        }
         let all_active_usable = self
             .space
             .active()
@@ -430,68 +435,6 @@ impl<T: Real, const N: usize, const W: usize> ParityMonitor<T, N, W> {
             self.last.pca_threshold = t.pca_threshold;
         }
         &self.last
-    }
-
-    /// The per-period screening when some sample is not healthy: common-mode
-    /// bus events and saturation, latching, railed outputs, and the
-    /// exclusion of newly failed sensors. Returns whether at least half of
-    /// the sensors in the set clip (common-mode saturation).
-    #[inline(never)]
-    fn screen_failures(&mut self, status: &mut [SensorStatus; N]) -> bool {
-        let mut newly_failed = [false; N];
-        let in_set = self.removed.iter().filter(|r| !**r).count();
-        // Bus, timing or output failures on at least half of the sensors in
-        // the set at once (the shared bus, the power, the scheduler) are
-        // common-mode events, not sensor failures: nothing is latched,
-        // the sensors are reported with their per-period status and
-        // return when their samples do (issue 16: a bus-wide glitch used
-        // to latch every sensor and leave the monitor `Lost`).
-        let bus_like = self
-            .health
-            .iter()
-            .zip(status.iter())
-            .filter(|(h, s)| h.failure().is_none() && s.transient().is_some())
-            .count();
-        let common_bus = bus_like >= 2 && 2 * bus_like >= in_set;
-        for (k, (h, st)) in self.health.iter_mut().zip(status.iter_mut()).enumerate() {
-            if h.failure().is_some() || !st.is_failed() {
-                continue;
-            }
-            match st.transient() {
-                Some(t) if common_bus => *st = t,
-                _ => {
-                    h.latch(*st);
-                    readmit::mark(&mut newly_failed, k);
-                }
-            }
-        }
-        // Railed outputs: long clipping on a minority of sensors.
-        let clipping = status
-            .iter()
-            .filter(|s| **s == SensorStatus::Clipping)
-            .count();
-        let common_mode = in_set > 0 && 2 * clipping >= in_set;
-        for (k, (h, st)) in self.health.iter_mut().zip(status.iter_mut()).enumerate() {
-            if !common_mode
-                && h.clipping_run() >= self.cfg.health.rail_samples
-                && h.failure().is_none()
-            {
-                h.rail();
-                *st = SensorStatus::Railed;
-                readmit::mark(&mut newly_failed, k);
-            }
-        }
-        if newly_failed.contains(&true) {
-            self.exclude_failed(&newly_failed);
-        }
-        // A failed sensor stays failed even if another one failed first.
-        for k in 0..N {
-            let latched = self.health.get(k).and_then(|h| h.failure());
-            if latched.is_some() && !self.removed.get(k).copied().unwrap_or(true) {
-                self.exclude(k);
-            }
-        }
-        common_mode
     }
 
     /// Threshold factors `[GLT, PCA, CUSUM]` set by calibration (1 = the

@@ -147,6 +147,12 @@ impl<T: Real, const N: usize> Readmission<T, N> {
         self.judged != 0
     }
 
+    /// Times sensor `k` left the set (parity isolations and hardware
+    /// failures) since reset; [`MAX_ISOLATIONS`] ends its way back.
+    pub(super) fn times_out(&self, k: usize) -> u8 {
+        self.isolations.get(k).copied().unwrap_or(u8::MAX)
+    }
+
     /// Sensor `k` is judged.
     pub(super) fn judges(&self, k: usize) -> bool {
         bit(k) & self.judged != 0
