@@ -15,7 +15,7 @@ use std::path::Path;
 
 use hal_sim::array::ArrayKind;
 use imu_fdi::parity::SensorStatus;
-use imu_fdi_cli::eval::parity_replay::{read_imu_log, replay_parity, ImuLog};
+use imu_fdi_cli::eval::parity_replay::{read_imu_log, replay_parity, ImuLog, Injection};
 
 /// The crash begins (SOURCES.md: ≈ 239 s).
 const CRASH: f64 = 239.0;
@@ -112,4 +112,96 @@ fn an_imu_that_stays_frozen_stays_out() {
             r.statuses
         );
     }
+}
+
+/// `log` with every IMU's row held at its first in `[start, end)`: the
+/// logger or the driver repeating a sample, all IMUs at once.
+fn all_held(log: &ImuLog, start: f64, end: f64) -> ImuLog {
+    (0..3).fold(log.clone(), |l, imu| damaged(&l, imu, start, end, false))
+}
+
+/// A 10 °/s step on IMU `imu`'s z gyro from `start` to the crash: the
+/// monitor must still isolate it (it is judging, and with every IMU).
+fn gz_step(imu: usize, start: f64) -> Option<Injection> {
+    Some(Injection {
+        imu,
+        channel: 5,
+        size: 10f64.to_radians(),
+        start,
+        end: CRASH,
+    })
+}
+
+/// GIVEN every IMU frozen together for 2 s, in flight (training at 80 s)
+/// or while training (at 100 s), THEN no sensor is latched out — a
+/// common-mode event, reported `Stuck` while it lasts — nothing alarms
+/// before the crash, and a later step is still isolated to its IMU
+/// (before: all nine sensors latched, the monitor `Lost` for the rest of
+/// the flight, or never monitoring when it happened in training).
+#[test]
+fn every_imu_frozen_at_once_is_a_common_mode_event() {
+    let log = log();
+    for (start, train) in [(150.0, 80.0), (120.0, 100.0)] {
+        let bad = all_held(&log, start, start + 2.0);
+        for kind in [ArrayKind::Gyro, ArrayKind::Accel] {
+            let what = format!("{kind:?} held {start} s, training {train} s");
+            let r = replay_parity(&bad, kind, train, 30.0, None).unwrap();
+            assert!(r.monitoring_from.is_some(), "{what}: never monitoring");
+            // Reported while frozen (1 s of repeats at 49 Hz), on every IMU.
+            for k in 0..9 {
+                assert!(
+                    r.statuses.iter().any(|(j, s, t)| *j == k
+                        && *s == SensorStatus::Stuck
+                        && (start..start + 2.0).contains(t)),
+                    "{what}: {:?}",
+                    r.statuses
+                );
+            }
+            assert!(
+                r.alarms.iter().all(|a| a.0 >= CRASH),
+                "{what}: {:?}",
+                r.alarms
+            );
+            assert!(
+                r.isolations.iter().all(|a| a.1 >= CRASH),
+                "{what}: {:?}",
+                r.isolations
+            );
+        }
+        let r = replay_parity(&bad, ArrayKind::Gyro, train, 30.0, gz_step(2, 190.0)).unwrap();
+        let first = r.isolations.first().copied();
+        assert!(
+            first.is_some_and(|(k, t)| k == 8 && (190.0..200.0).contains(&t)),
+            "held {start} s: step on IMU2 g_z at 190 s: {:?}",
+            r.isolations
+        );
+    }
+}
+
+/// GIVEN IMU1 frozen for 5 s while the monitor trains (from 100 s), THEN
+/// once its output is back it rejoins and training starts over with all
+/// three IMUs, so a step on IMU1 later is isolated to it (before: trained
+/// and monitored with two IMUs, which detect but cannot isolate, and
+/// IMU1 out for the rest of the flight).
+#[test]
+fn an_imu_frozen_while_training_rejoins_and_training_starts_over() {
+    let bad = damaged(&log(), 1, 120.0, 125.0, false);
+    let r = replay_parity(&bad, ArrayKind::Gyro, 100.0, 30.0, gz_step(1, 190.0)).unwrap();
+    let from = r.monitoring_from.unwrap();
+    // Training restarted at the first good sample (≥ 125 s) for 30 s.
+    assert!((150.0..165.0).contains(&from), "monitoring from {from}");
+    assert!(
+        r.statuses
+            .iter()
+            .any(|(j, s, t)| *j == 3 && *s == SensorStatus::Stuck && (120.0..122.0).contains(t)),
+        "{:?}",
+        r.statuses
+    );
+    let first = r.isolations.first().copied();
+    assert!(
+        first.is_some_and(|(k, t)| k == 5 && (190.0..200.0).contains(&t)),
+        "step on IMU1 g_z at 190 s: {:?}",
+        r.isolations
+    );
+    assert!(r.alarms.iter().all(|a| a.0 >= 190.0), "{:?}", r.alarms);
 }
