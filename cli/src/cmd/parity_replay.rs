@@ -30,7 +30,8 @@ pub(crate) struct Args {
     inject: Vec<f64>,
     /// Print one JSON object instead of text: {"gyro": {"monitoring_from_s",
     /// "power_up_judged", "alarms": [{"start_s", "end_s", "sensor"}], "isolations": [{"sensor",
-    /// "t_s"}], "statuses": [...], "readmissions": [{"sensor", "t_s"}]}, "accel": {...}},
+    /// "t_s"}], "statuses": [...], "readmissions": [{"sensor", "t_s"}], "not_judging":
+    /// [{"start_s", "end_s", "phase"}]}, "accel": {...}},
     /// sensor = 3·IMU + axis.
     #[arg(long)]
     json: bool,
@@ -180,6 +181,14 @@ pub(crate) fn parity_replay_cmd(
         }
         if r.rest_common_mode {
             out!("  at rest, two or more gyros beyond the offset limit: not judged, none named (a steady turn, or several faulty gyros)");
+        }
+        if !r.not_judging.is_empty() {
+            let off: Vec<String> = r
+                .not_judging
+                .iter()
+                .map(|(a, b, p)| format!("{a:.2}-{b:.2} s ({p:?})"))
+                .collect();
+            out!("  not judging (no alarm covers these): {}", off.join(", "));
         }
         out!("  parity alarms: {}", fmt(&r.alarms));
         let iso: Vec<String> = r

@@ -8,8 +8,8 @@ use anyhow::{bail, Context, Result};
 use nalgebra::Matrix3;
 
 use imu_fdi::parity::{
-    Geometry, ParityConfig, ParityMonitor, ParityReport, Reading, RestCheck, RestConfig, RestState,
-    SensorStatus,
+    Geometry, ParityConfig, ParityMonitor, ParityPhase, ParityReport, Reading, RestCheck,
+    RestConfig, RestState, SensorStatus,
 };
 
 use hal_sim::array::ArrayKind;
@@ -160,6 +160,10 @@ pub struct ParityReplay {
     pub readmissions: Vec<(usize, f64)>,
     /// First time each (sensor, non-healthy status) was seen.
     pub statuses: Vec<(usize, SensorStatus, f64)>,
+    /// Spells after monitoring began in which the monitor could not judge
+    /// (start, end, phase: `Lost`, `NoRedundancy`, or training again):
+    /// "no alarm" does not cover them.
+    pub not_judging: Vec<(f64, f64, ParityPhase)>,
     /// Common-mode saturation intervals (start, end, –).
     pub saturation: Vec<(f64, f64, Option<usize>)>,
     /// PX4-like alarm intervals (start, end, IMU blamed).
@@ -328,6 +332,7 @@ pub fn replay_parity_observed(
         ..ParityReplay::default()
     };
     let (mut was, mut was_sat, mut was_px4, mut was_ap) = (false, false, false, false);
+    let mut was_off = false;
     let mut prev_t = None;
     for (t, row) in log.t.iter().zip(log.imus.iter()) {
         if *t < train_start {
@@ -370,7 +375,7 @@ pub fn replay_parity_observed(
             }
         }
         let r = monitor.step(&readings);
-        if out.monitoring_from.is_none() && r.phase == imu_fdi::parity::ParityPhase::Monitoring {
+        if out.monitoring_from.is_none() && r.phase == ParityPhase::Monitoring {
             out.monitoring_from = Some(*t);
         }
         for (k, st) in r.status.iter().enumerate() {
@@ -394,6 +399,14 @@ pub fn replay_parity_observed(
         }
         if out.monitoring_from.is_some() {
             edge(&mut out.alarms, r.fault, &mut was, *t, r.suspect);
+            let off = r.phase != ParityPhase::Monitoring;
+            if off && !was_off {
+                out.not_judging.push((*t, *t, r.phase));
+            }
+            if let Some(last) = out.not_judging.last_mut().filter(|_| off) {
+                last.1 = *t;
+            }
+            was_off = off;
         }
         edge(
             &mut out.saturation,

@@ -207,10 +207,18 @@ pub fn replay_json(
                 serde_json::json!({"sensor": k, "status": format!("{s:?}").to_lowercase(), "t_s": t})
             })
             .collect();
+        let not_judging: Vec<_> = r
+            .not_judging
+            .iter()
+            .map(|(a, b, p)| {
+                serde_json::json!({"start_s": a, "end_s": b, "phase": format!("{p:?}").to_lowercase()})
+            })
+            .collect();
         out.insert(
             name.into(),
             serde_json::json!({
                 "monitoring_from_s": r.monitoring_from,
+                "not_judging": not_judging,
                 "power_up_judged": r.power_up_judged,
                 "alarms": alarms,
                 "isolations": isolations,
