@@ -15,10 +15,26 @@ use std::path::Path;
 
 use hal_sim::array::ArrayKind;
 use imu_fdi::parity::SensorStatus;
-use imu_fdi_cli::eval::parity_replay::{read_imu_log, replay_parity, ImuLog, Injection};
+use imu_fdi_cli::eval::parity_replay::{
+    read_imu_log, replay_parity, ImuLog, Injection, ParityReplay,
+};
 
 /// The crash begins (SOURCES.md: ≈ 239 s).
 const CRASH: f64 = 239.0;
+
+/// No alarm and no isolation before the crash.
+fn nothing_before_the_crash(r: &ParityReplay, what: &str) {
+    assert!(
+        r.alarms.iter().all(|a| a.0 >= CRASH),
+        "{what}: {:?}",
+        r.alarms
+    );
+    assert!(
+        r.isolations.iter().all(|a| a.1 >= CRASH),
+        "{what}: {:?}",
+        r.isolations
+    );
+}
 
 fn log() -> ImuLog {
     read_imu_log(Path::new(concat!(
@@ -79,16 +95,7 @@ fn an_imu_frozen_or_silent_for_a_spell_is_readmitted_once_its_output_is_back() {
                     "{what}: {t_back}"
                 );
             }
-            assert!(
-                r.alarms.iter().all(|a| a.0 >= CRASH),
-                "{what}: {:?}",
-                r.alarms
-            );
-            assert!(
-                r.isolations.iter().all(|a| a.1 >= CRASH),
-                "{what}: {:?}",
-                r.isolations
-            );
+            nothing_before_the_crash(&r, &what);
         }
     }
 }
@@ -157,16 +164,7 @@ fn every_imu_frozen_at_once_is_a_common_mode_event() {
                     r.statuses
                 );
             }
-            assert!(
-                r.alarms.iter().all(|a| a.0 >= CRASH),
-                "{what}: {:?}",
-                r.alarms
-            );
-            assert!(
-                r.isolations.iter().all(|a| a.1 >= CRASH),
-                "{what}: {:?}",
-                r.isolations
-            );
+            nothing_before_the_crash(&r, &what);
         }
         let r = replay_parity(&bad, ArrayKind::Gyro, train, 30.0, gz_step(2, 190.0)).unwrap();
         let first = r.isolations.first().copied();
