@@ -37,13 +37,7 @@
 //! earlier, but in simulation (aircraft, GNSS 0.2 s late, both block
 //! tests) it raised 235 events in 10 fault-free hours against 1: the
 //! offset then learnt under the tighter early thresholds is biased by the
-//! censoring of learning (docs/results.md, stop 29). What the test has
-//! learnt (offset, block and window variances, motion law) is learnt for
-//! every lag alongside, on the blocks the test in use learns from, and the
-//! new lag's takes over at a switch: the old lag's describe another
-//! residual (log171 from 80 s, lag 0 until 105 s and 0.3 s from 122 s:
-//! IMU1 a_z's block variance at 155 s 0.101 kept from lag 0, 0.068 learnt
-//! at 0.3 s). At rest every lag gives the same residual: the lag is
+//! censoring of learning (docs/results.md, stop 29). At rest every lag gives the same residual: the lag is
 //! learnt in flight only. Limits: lags above 0.8 s or `DELAY_RING` IMU
 //! periods are not tried; one lag for the three axes.
 //!
@@ -150,10 +144,6 @@ pub(in crate::monitor) struct VelocityIncrement<T> {
     block_external: bool,
     /// Blocks, windows, learning and decisions.
     pub(in crate::monitor) test: BlockTest<T>,
-    /// Per lag: the statistics of that lag's block estimates, learnt on
-    /// the blocks the test in use learns from (the in-use lag's entry is
-    /// idle). A lag switch takes the new lag's over (module notes).
-    shadow: [BlockTest<T>; LAGS],
 }
 
 impl<T: Real> VelocityIncrement<T> {
@@ -194,7 +184,6 @@ impl<T: Real> VelocityIncrement<T> {
             cover: AidingCover::new(),
             block_external: false,
             test: BlockTest::new(alpha),
-            shadow: core::array::from_fn(|_| BlockTest::new(alpha)),
         }
     }
 
@@ -207,9 +196,6 @@ impl<T: Real> VelocityIncrement<T> {
     pub fn reset(&mut self) {
         self.clear_windows();
         self.test.reset();
-        for s in self.shadow.iter_mut() {
-            s.reset();
-        }
         self.cover = AidingCover::new();
     }
 
@@ -228,9 +214,6 @@ impl<T: Real> VelocityIncrement<T> {
         self.invalidate();
         self.attitude = None;
         self.test.clear_windows();
-        for s in self.shadow.iter_mut() {
-            s.clear_windows();
-        }
         self.cover.clear_windows();
     }
 
@@ -392,15 +375,6 @@ impl<T: Real> VelocityIncrement<T> {
         // quiet, no flag of the monitor.
         let learn = !external && self.test.quiet(cfg.learn_below);
         self.cover.close_block(learn, keep);
-        // The other lags' statistics, on the same blocks: a block the test
-        // in use does not learn from (a flag, a decision near threshold) is
-        // not learnt by them either.
-        for (j, (s, e)) in self.shadow.iter_mut().zip(est.iter()).enumerate() {
-            if let (true, Some(e)) = (j != self.lag, e) {
-                s.mark_external(!learn);
-                s.close_block(cfg, *e, motion, limits);
-            }
-        }
         self.learn_lag(cfg, &est);
     }
 
@@ -437,22 +411,6 @@ impl<T: Real> VelocityIncrement<T> {
         let cur = self.diff2.get(self.lag).copied().unwrap_or_else(T::zero);
         let new = self.diff2.get(best).copied().unwrap_or_else(T::zero);
         if best != self.lag && new < cur * T::lit(LAG_SWITCH) {
-            // The statistics learnt at the old lag describe its residual,
-            // not the new one's (module notes): the new lag's own, learnt
-            // on the same blocks, take over, and the old ones carry on
-            // learning as a shadow (not judging).
-            let old = self.lag;
-            let judging = self.test.judging;
-            if let Some(s) = self.shadow.get_mut(best) {
-                core::mem::swap(&mut self.test, s);
-            }
-            if let (Some(a), Some(b)) = (self.shadow.get(best).cloned(), self.shadow.get_mut(old)) {
-                *b = a;
-            }
-            self.test.judging = judging;
-            if let Some(b) = self.shadow.get_mut(old) {
-                b.judging = false;
-            }
             self.lag = best;
             self.test.clear_windows();
         }
