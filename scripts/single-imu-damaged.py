@@ -32,9 +32,9 @@ base=run()
 def extra(ev):
     if ev is None: return 'ERR'
     return sum(max(0,e-b) for E,Bs in zip(ev,base) for e,b in zip(E,Bs))
-def frz(lo,hi):
+def frz(lo,hi,dat=None):
     out=[];held=None
-    for r in idat:
+    for r in (idat if dat is None else dat):
         r=list(r)
         if lo<=float(r[0])<hi:
             if held is None: held=r[1:]
@@ -42,7 +42,8 @@ def frz(lo,hi):
         out.append(r)
     return out
 tot={}
-for kind in ['imu cut','imu frozen','att cut','gps cut']:
+KINDS=os.environ.get('KINDS','imu cut,imu frozen,att cut,gps cut').split(',')
+for kind in KINDS:
     cells=[]
     for t0 in [120,150,180,210]:
         for dur in ([0.5,2,5] if kind.startswith('imu') else [2,10,30]):
@@ -50,6 +51,8 @@ for kind in ['imu cut','imu frozen','att cut','gps cut']:
             if kind=='imu cut': ev=run(imu=[r for r in idat if not lo<=float(r[0])<hi])
             elif kind=='imu frozen': ev=run(imu=frz(lo,hi))
             elif kind=='att cut': ev=run(att=[r for r in adat if not lo<=float(r[0])<hi])
+            elif kind=='att frozen': ev=run(att=frz(lo,hi,adat))
+            elif kind=='gps frozen': ev=run(gps=frz(lo,hi,gdat))
             else: ev=run(gps=[r for r in gdat if not lo<=float(r[0])<hi])
             x=extra(ev); cells.append(f"{t0}+{dur}:{x}")
             tot[kind]=tot.get(kind,0)+(x if isinstance(x,int) else 0)
