@@ -2,10 +2,12 @@
 # Issue 15: the single-IMU monitors on log171 damaged as a board damages it
 # (replay 80-235 s, each IMU alone): the IMU rows of a spell cut (dropout)
 # or held at its first row (frozen), the attitude or GNSS velocity rows of a
-# spell cut; onsets 120/150/180/210 s. Prints, per damage and spell
-# (onset+duration), the flag events beyond the undamaged run's, summed
-# over the three IMUs.
+# spell cut or held at its first (a source repeating its last output);
+# onsets 120/150/180/210 s. Prints, per damage and spell (onset+duration),
+# the flag events beyond the undamaged run's, summed over the three IMUs.
 # usage: scripts/single-imu-damaged.py BIN ukf|otsukf
+#   KINDS (env, comma-separated; default all): imu cut, imu frozen, att cut,
+#   gps cut, att frozen, gps frozen
 #   (BIN: e.g. target/release/imu-fdi-sim, built with
 #    `cargo build --release -p imu-fdi-cli --bin imu-fdi-sim`)
 import csv, json, os, subprocess, sys, tempfile
@@ -42,7 +44,7 @@ def frz(lo,hi,dat=None):
         out.append(r)
     return out
 tot={}
-KINDS=os.environ.get('KINDS','imu cut,imu frozen,att cut,gps cut').split(',')
+KINDS=os.environ.get('KINDS','imu cut,imu frozen,att cut,gps cut,att frozen,gps frozen').split(',')
 for kind in KINDS:
     cells=[]
     for t0 in [120,150,180,210]:
