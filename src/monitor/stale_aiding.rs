@@ -11,7 +11,8 @@
 //! — log171's attitude repeats for up to two epochs at rest and its GNSS
 //! velocity (cm/s resolution) for one — and losing such an epoch costs
 //! nothing; a velocity of exactly zero is kept (a receiver's static hold
-//! clamps it there for as long as the vehicle is still).
+//! clamps it there for as long as the vehicle is still). Feature
+//! `stale-aiding` (default; off in the MCU images, flash budget).
 
 use super::input::aiding_in_range;
 use super::Health;
@@ -39,16 +40,16 @@ impl<T: Real> RepeatedAiding<T> {
     /// a velocity of exactly zero. True when it withdrew one.
     pub fn withdraw(&mut self, m: &mut Measurement<T>) -> bool {
         let mut withdrew = false;
-        for triad in 0..NZ / 3 {
-            let channels = 3 * triad..3 * triad + 3;
+        let triads = m
+            .available
+            .chunks_exact_mut(3)
+            .zip(m.z.as_slice().chunks_exact(3))
+            .zip(self.prev.as_mut_slice().chunks_exact_mut(3))
+            .zip(self.seen.chunks_exact_mut(3));
+        for (triad, (((a, z), p), s)) in triads.enumerate() {
             let (mut present, mut same, mut zero) = (0, true, true);
-            for i in channels.clone() {
-                if let (Some(true), Some(z), Some(p), Some(s)) = (
-                    m.available.get(i).copied(),
-                    m.z.get(i),
-                    self.prev.get_mut(i),
-                    self.seen.get_mut(i),
-                ) {
+            for (((a, z), p), s) in a.iter().zip(z).zip(p.iter_mut()).zip(s.iter_mut()) {
+                if *a {
                     present += 1;
                     same &= *s && *z == *p;
                     zero &= *z == T::zero();
@@ -56,9 +57,7 @@ impl<T: Real> RepeatedAiding<T> {
                 }
             }
             if present >= 2 && same && !(triad == 0 && zero) {
-                for a in m.available.iter_mut().skip(channels.start).take(3) {
-                    *a = false;
-                }
+                a.fill(false);
                 withdrew = true;
             }
         }
@@ -69,6 +68,9 @@ impl<T: Real> RepeatedAiding<T> {
 /// The aiding a single-IMU monitor may use this period: channels outside
 /// their physical range withdrawn (`Health::aiding_invalid`), then triads
 /// that repeat their last values (`Health::aiding_stale`).
+// Out of line: inlined into both monitors' steps it cost the MCU image
+// ≈ 1.1 KB of flash, over the `imu_fdi` budget.
+#[inline(never)]
 pub(crate) fn screened_aiding<T: Real>(
     aiding: &Measurement<T>,
     max_speed: T,
@@ -78,7 +80,7 @@ pub(crate) fn screened_aiding<T: Real>(
     let (mut out, invalid) = aiding_in_range(aiding, max_speed);
     health.aiding_invalid = invalid;
     // Most periods carry no aiding: nothing to compare.
-    if out.any() {
+    if cfg!(feature = "stale-aiding") && out.any() {
         health.aiding_stale = repeated.withdraw(&mut out);
     }
     out
