@@ -2,10 +2,12 @@
 # Issue 15: the single-IMU monitors on log171 damaged as a board damages it
 # (replay 80-235 s, each IMU alone): the IMU rows of a spell cut (dropout)
 # or held at its first row (frozen), the attitude or GNSS velocity rows of a
-# spell cut; onsets 120/150/180/210 s. Prints, per damage and spell
-# (onset+duration), the flag events beyond the undamaged run's, summed
-# over the three IMUs.
+# spell cut or held at its first (a source repeating its last output);
+# onsets 120/150/180/210 s. Prints, per damage and spell (onset+duration),
+# the flag events beyond the undamaged run's, summed over the three IMUs.
 # usage: scripts/single-imu-damaged.py BIN ukf|otsukf
+#   KINDS (env, comma-separated; default all): imu cut, imu frozen, att cut,
+#   gps cut, att frozen, gps frozen
 #   (BIN: e.g. target/release/imu-fdi-sim, built with
 #    `cargo build --release -p imu-fdi-cli --bin imu-fdi-sim`)
 import csv, json, os, subprocess, sys, tempfile
@@ -32,9 +34,9 @@ base=run()
 def extra(ev):
     if ev is None: return 'ERR'
     return sum(max(0,e-b) for E,Bs in zip(ev,base) for e,b in zip(E,Bs))
-def frz(lo,hi):
+def frz(lo,hi,dat=None):
     out=[];held=None
-    for r in idat:
+    for r in (idat if dat is None else dat):
         r=list(r)
         if lo<=float(r[0])<hi:
             if held is None: held=r[1:]
@@ -42,7 +44,8 @@ def frz(lo,hi):
         out.append(r)
     return out
 tot={}
-for kind in ['imu cut','imu frozen','att cut','gps cut']:
+KINDS=os.environ.get('KINDS','imu cut,imu frozen,att cut,gps cut,att frozen,gps frozen').split(',')
+for kind in KINDS:
     cells=[]
     for t0 in [120,150,180,210]:
         for dur in ([0.5,2,5] if kind.startswith('imu') else [2,10,30]):
@@ -50,6 +53,8 @@ for kind in ['imu cut','imu frozen','att cut','gps cut']:
             if kind=='imu cut': ev=run(imu=[r for r in idat if not lo<=float(r[0])<hi])
             elif kind=='imu frozen': ev=run(imu=frz(lo,hi))
             elif kind=='att cut': ev=run(att=[r for r in adat if not lo<=float(r[0])<hi])
+            elif kind=='att frozen': ev=run(att=frz(lo,hi,adat))
+            elif kind=='gps frozen': ev=run(gps=frz(lo,hi,gdat))
             else: ev=run(gps=[r for r in gdat if not lo<=float(r[0])<hi])
             x=extra(ev); cells.append(f"{t0}+{dur}:{x}")
             tot[kind]=tot.get(kind,0)+(x if isinstance(x,int) else 0)

@@ -182,6 +182,7 @@ pub fn health_flag(h: &Health) -> Option<&'static str> {
         (h.covariance_reset, "covariance_reset"),
         (h.aiding_rejected, "aiding_rejected"),
         (h.aiding_invalid, "aiding_invalid"),
+        (h.aiding_stale, "aiding_stale"),
         (h.aiding_realigned, "aiding_realigned"),
     ];
     flags.iter().find(|(set, _)| *set).map(|(_, name)| *name)

@@ -11,6 +11,7 @@ mod input;
 mod otsukf_monitor;
 mod realign;
 mod report;
+mod stale_aiding;
 mod task;
 mod ukf_monitor;
 

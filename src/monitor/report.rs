@@ -66,6 +66,10 @@ pub struct Health {
     /// At least one aiding channel was outside its physical range (or not
     /// finite); it was not used.
     pub aiding_invalid: bool,
+    /// An aiding triad repeated its previous values bit for bit (a source
+    /// repeating its last output); it was not used. A source that stays
+    /// frozen then ages into the aiding-loss handling, as a silent one.
+    pub aiding_stale: bool,
     /// After `gate_max_rejections` gate rejections in a row, an aiding
     /// innovation beyond `realign_innovation`: its triad's states were
     /// re-aligned to the aiding (covariance reset) instead of fusing it. The

@@ -175,6 +175,8 @@ fn health_label(h: &imu_fdi::monitor::Health) -> Option<&'static str> {
         Some("aiding realigned")
     } else if h.aiding_invalid {
         Some("aiding invalid")
+    } else if h.aiding_stale {
+        Some("aiding repeating its last values")
     } else if h.aiding_rejected {
         Some("aiding outlier rejected")
     } else if h.pitch_singular {

@@ -6,10 +6,11 @@ use nalgebra::Vector3;
 
 use super::align::align_state;
 use super::input::{
-    aiding_in_range, check_period, in_range, lever_arm_rates, next_phase, saturated, usable_aiding,
-    FrozenCheck, ImuGap, Period,
+    check_period, in_range, lever_arm_rates, next_phase, saturated, usable_aiding, FrozenCheck,
+    ImuGap, Period,
 };
 use super::realign::AidingTrack;
+use super::stale_aiding::{screened_aiding, RepeatedAiding};
 use super::{ChannelState, ConfigError, Health, OtsukfDetail, OtsukfReport, Phase};
 use crate::filter::{Gate, Otsukf, UkfError};
 use crate::math::Real;
@@ -74,6 +75,8 @@ pub struct OtsukfMonitor<T> {
     /// Time the IMU gave the filter nothing to follow (`ImuGap`), and
     /// the triads (velocity, attitude) to re-align after a gap (`imu_gap.rs`).
     imu_gap: ImuGap<T>,
+    /// The aiding's previous values (`stale_aiding.rs`).
+    repeated: RepeatedAiding<T>,
     gap_realign: [bool; 2],
     /// Time left during which nothing is learned and no new fault is
     /// declared: after an unusable or saturated sample, a re-alignment.
@@ -133,6 +136,7 @@ impl<T: Real> OtsukfMonitor<T> {
             track: AidingTrack::new(),
             frozen: FrozenCheck::new(),
             imu_gap: ImuGap::default(),
+            repeated: RepeatedAiding::new(),
             gap_realign: [false; 2],
             holdoff: T::zero(),
             inflation: Inflation::new(),
@@ -185,10 +189,8 @@ impl<T: Real> OtsukfMonitor<T> {
                 *a = if *l != 0 { *a + elapsed } else { T::zero() };
             }
         }
-        // Aiding outside its physical range is never used.
-        let (aiding_checked, aiding_invalid) = aiding_in_range(aiding, b.max_aiding_speed);
-        let aiding = &aiding_checked;
-        health.aiding_invalid = aiding_invalid;
+        // Aiding outside its physical range, or repeating itself, is never used.
+        let aiding = &screened_aiding(aiding, b.max_aiding_speed, &mut self.repeated, &mut health);
         let usable = in_range && !health.frozen;
         if !usable || health.saturated {
             self.holdoff = self.holdoff.max(T::lit(INPUT_HOLDOFF_S));

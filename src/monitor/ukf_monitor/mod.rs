@@ -1,10 +1,9 @@
 use nalgebra::Vector3;
 
 use super::align::align_state;
-use super::input::{
-    aiding_in_range, check_period, in_range, lever_arm_rates, saturated, ImuGap, Period,
-};
+use super::input::{check_period, in_range, lever_arm_rates, saturated, ImuGap, Period};
 use super::realign::NEVER_FUSED_S;
+use super::stale_aiding::{screened_aiding, RepeatedAiding};
 use super::{ConfigError, Health, Phase, UkfMonitorConfig, UkfReport};
 use crate::detect::{
     paper_matrix, Detector, InnovationWindow, Persistence, Statistic, TTest,
@@ -121,6 +120,8 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     /// Time the IMU gave the filter nothing to follow (`ImuGap`), and
     /// the triads (velocity, attitude) to re-align after a gap (`imu_gap.rs`).
     imu_gap: ImuGap<T>,
+    /// The aiding's previous values (`stale_aiding.rs`).
+    repeated: RepeatedAiding<T>,
     gap_realign: [bool; 2],
     stats_holdoff: T,
     /// How long each channel has been flagged, s (0 when it is not).
@@ -220,6 +221,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             prev_imu: ImuVec::zeros(),
             frozen_count: 0,
             imu_gap: ImuGap::default(),
+            repeated: RepeatedAiding::new(),
             gap_realign: [false; 2],
             stats_holdoff: T::zero(),
             flagged_for: [T::zero(); NZ],
@@ -392,10 +394,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             *s += elapsed;
         }
 
-        // Aiding outside its physical range is never used.
-        let (aiding_checked, aiding_invalid) = aiding_in_range(aiding, self.cfg.max_aiding_speed);
-        let aiding = &aiding_checked;
-        health.aiding_invalid = aiding_invalid;
+        // Aiding outside its physical range, or repeating itself, is never used.
+        let aiding = &screened_aiding(
+            aiding,
+            self.cfg.max_aiding_speed,
+            &mut self.repeated,
+            &mut health,
+        );
 
         // --- alignment ----------------------------------------------------
         if self.phase == Phase::Aligning {
