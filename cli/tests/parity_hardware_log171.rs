@@ -203,3 +203,54 @@ fn an_imu_frozen_while_training_rejoins_and_training_starts_over() {
     );
     assert!(r.alarms.iter().all(|a| a.0 >= 190.0), "{:?}", r.alarms);
 }
+
+/// `log` with the rows in `[start, end)` removed (a logging dropout) and,
+/// when `jump` is not zero, every later time stamp moved by `jump` s (a
+/// logger clock that jumps).
+fn gap(log: &ImuLog, start: f64, end: f64, jump: f64) -> ImuLog {
+    let mut out = log.clone();
+    let keep: Vec<bool> = log.t.iter().map(|t| !(start..end).contains(t)).collect();
+    let mut k = keep.iter();
+    out.t.retain(|_| *k.next().unwrap());
+    let mut k = keep.iter();
+    out.imus.retain(|_| *k.next().unwrap());
+    for t in out.t.iter_mut().filter(|t| **t >= end) {
+        *t += jump;
+    }
+    out
+}
+
+#[test]
+fn a_dropout_or_a_clock_jump_changes_nothing_before_it() {
+    // The replay's sample rate used to be rows over span: a 30-s dropout
+    // made it 41 Hz, a 1,000-s clock jump 8 Hz, and training, blocks and
+    // windows — configured in samples from it — then ended elsewhere
+    // before the damage (monitoring from 105.6 s instead of 110.2 s; with
+    // the jump, alarms and isolations of healthy sensors at 92–106 s).
+    let log = log();
+    let step = gz_step(1, 125.0);
+    for kind in [ArrayKind::Gyro, ArrayKind::Accel] {
+        let base = replay_parity(&log, kind, 80.0, 30.0, step).unwrap();
+        for (what, bad) in [
+            ("dropout 150–180 s", gap(&log, 150.0, 180.0, 0.0)),
+            ("clock +1000 s at 150 s", gap(&log, 150.0, 150.0, 1000.0)),
+        ] {
+            let r = replay_parity(&bad, kind, 80.0, 30.0, step).unwrap();
+            let what = format!("{kind:?}, {what}");
+            assert_eq!(r.monitoring_from, base.monitoring_from, "{what}");
+            let before = |r: &ParityReplay| -> (Vec<(usize, f64)>, usize) {
+                let iso = r.isolations.iter().copied().filter(|i| i.1 < 150.0);
+                (
+                    iso.collect(),
+                    r.alarms.iter().filter(|a| a.0 < 150.0).count(),
+                )
+            };
+            assert_eq!(before(&r), before(&base), "{what}");
+        }
+        if kind == ArrayKind::Gyro {
+            // The step itself is isolated to IMU1 z within 10 s.
+            let (k, t) = base.isolations[0];
+            assert!(k == 5 && t < 135.0, "{:?}", base.isolations);
+        }
+    }
+}

@@ -126,8 +126,9 @@ fn injected_gyro_steps_are_isolated_at_the_measured_rates() {
     )
     .unwrap();
     let axis = |a: usize| move |c: &StepCase| c.injection.channel == 3 + a;
-    // 1 °/s, measured: z 167/174, y 136/174, x 33/174, 4 cases with a
-    // false alarm. IMU0's x gyro reads 12 °/s of aliased vibration per
+    // 1 °/s, measured: z 167/174, y 137/174, x 31/174, 3 cases with a
+    // false alarm (with the rate as rows over span, which the log's arming
+    // gap biased to 49.06 Hz: y 136, x 33, 4 cases). IMU0's x gyro reads 12 °/s of aliased vibration per
     // sample, so a step on IMU1 or IMU2 x is nearly the opposite step on
     // the other one (whitened cosine −0.95): x steps are isolated only since
     // the 5- and 10-s windows attribute alarms on their unclipped means
@@ -140,9 +141,9 @@ fn injected_gyro_steps_are_isolated_at_the_measured_rates() {
     let (y, _) = passes(&cases, axis(1));
     assert!(y >= 135, "{y}");
     let (x, _) = passes(&cases, axis(0));
-    assert!(x >= 32, "{x}");
+    assert!(x >= 30, "{x}");
     let fa = cases.iter().filter(|c| c.false_alarm).count();
-    assert!(fa <= 4, "{fa}");
+    assert!(fa <= 3, "{fa}");
     // Every IMU is covered: z steps on each IMU isolated in ≥ 52 of 58
     // cases (measured 53, 56, 58).
     for imu in 0..3 {
@@ -171,8 +172,9 @@ fn injected_accelerometer_steps_are_isolated_at_the_measured_rates() {
         CRASH,
     )
     .unwrap();
-    // 0.3 m/s², measured: x 156/174, y 164/174, z 101/174 (the a_z
-    // vibration events above), 3 cases with a false alarm (before the
+    // 0.3 m/s², measured: x 153/174, y 166/174, z 96/174 (the a_z
+    // vibration events above), 5 cases with a false alarm (with the rate as
+    // rows over span, 49.06 Hz: x 156, y 164, z 101, 3; before the
     // unclipped attribution: y 162, z 96, 4). (Before the covariances'
     // delayed learning and `learn_below` 0.95: x 141, y 159, z 91, 5 cases
     // with a false alarm.)
@@ -180,15 +182,15 @@ fn injected_accelerometer_steps_are_isolated_at_the_measured_rates() {
     let (x, _) = passes(&cases, axis(0));
     let (y, _) = passes(&cases, axis(1));
     let (z, _) = passes(&cases, axis(2));
-    assert!(x >= 155 && y >= 163 && z >= 100, "{x} {y} {z}");
+    assert!(x >= 152 && y >= 165 && z >= 95, "{x} {y} {z}");
     let fa = cases.iter().filter(|c| c.false_alarm).count();
-    assert!(fa <= 3, "{fa}");
+    assert!(fa <= 5, "{fa}");
     for imu in 0..3 {
         let (ok, _) = passes(&cases, |c| {
             c.injection.imu == imu && c.injection.channel < 2
         });
-        // Measured 105, 107, 108.
-        assert!(ok >= 104, "imu {imu}: {ok}");
+        // Measured 103, 108, 108 (105, 107, 108 at 49.06 Hz).
+        assert!(ok >= 102, "imu {imu}: {ok}");
     }
 }
 

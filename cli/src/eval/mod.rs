@@ -11,6 +11,7 @@ pub mod campaign;
 mod dataflash_imus;
 pub mod gnss_lag;
 pub mod inject;
+pub mod log_rate;
 pub mod parity_campaign;
 pub mod parity_injection;
 pub mod parity_replay;

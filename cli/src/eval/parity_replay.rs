@@ -276,8 +276,11 @@ pub fn replay_parity_observed(
             log.count
         );
     }
-    let span = log.t.last().copied().unwrap_or(0.0) - log.t.first().copied().unwrap_or(0.0);
-    let rate = (log.t.len().saturating_sub(1)) as f64 / span.max(1e-9);
+    // Configured in samples from the logger's rate, not rows over span: a
+    // gap or a clock jump anywhere must not change the replay before it.
+    let Some(rate) = super::log_rate::sample_rate_hz(&log.t) else {
+        bail!("the log has fewer than two rows with increasing time");
+    };
     let (offset, fs) = match kind {
         ArrayKind::Gyro => (3, 2000.0_f64.to_radians()),
         ArrayKind::Accel => (0, 16.0 * imu_fdi::model::G0),
