@@ -83,8 +83,6 @@ mod merge;
 mod motion_variance;
 #[cfg(test)]
 mod motion_variance_tests;
-#[cfg(feature = "velocity-increment-test")]
-mod relearn;
 #[cfg(test)]
 pub(super) mod test_noise;
 pub(super) use merge::merge_block_flags;
@@ -394,21 +392,6 @@ impl<T: Real> BlockTest<T> {
         motion: T,
         limits: &ChannelLimits<T>,
     ) {
-        self.close_block_gated(cfg, mean, motion, limits, None);
-    }
-
-    /// [`close_block`](Self::close_block), with `gate` (when given) the
-    /// ratios another test's decisions reached on this block: a test that
-    /// learns alongside the judging one (`relearn`) learns only what the
-    /// latter's gate lets through.
-    pub fn close_block_gated(
-        &mut self,
-        cfg: &BlockTestConfig<T>,
-        mean: Vector3<T>,
-        motion: T,
-        limits: &ChannelLimits<T>,
-        gate: Option<Vector3<T>>,
-    ) {
         if let Some(b) = self.blocks.get_mut(self.head) {
             *b = mean;
         }
@@ -437,9 +420,6 @@ impl<T: Real> BlockTest<T> {
         self.filled = (self.filled + 1).min(RING);
         if self.judging {
             self.decide(cfg, limits);
-        }
-        if let (Some(g), Some(r)) = (gate, self.slot(0).and_then(|i| self.ratio_at.get_mut(i))) {
-            *r = r.sup(&g);
         }
         self.learn(cfg);
     }

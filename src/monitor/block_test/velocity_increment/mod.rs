@@ -144,9 +144,6 @@ pub(in crate::monitor) struct VelocityIncrement<T> {
     block_external: bool,
     /// Blocks, windows, learning and decisions.
     pub(in crate::monitor) test: BlockTest<T>,
-    /// Since the last lag switch, until it can take over: the new lag's
-    /// statistics learnt afresh (`block_test/relearn.rs`).
-    relearn: Option<BlockTest<T>>,
 }
 
 impl<T: Real> VelocityIncrement<T> {
@@ -187,7 +184,6 @@ impl<T: Real> VelocityIncrement<T> {
             cover: AidingCover::new(),
             block_external: false,
             test: BlockTest::new(alpha),
-            relearn: None,
         }
     }
 
@@ -200,7 +196,6 @@ impl<T: Real> VelocityIncrement<T> {
     pub fn reset(&mut self) {
         self.clear_windows();
         self.test.reset();
-        self.relearn = None;
         self.cover = AidingCover::new();
     }
 
@@ -219,9 +214,6 @@ impl<T: Real> VelocityIncrement<T> {
         self.invalidate();
         self.attitude = None;
         self.test.clear_windows();
-        if let Some(f) = self.relearn.as_mut() {
-            f.clear_windows();
-        }
         self.cover.clear_windows();
     }
 
@@ -379,13 +371,6 @@ impl<T: Real> VelocityIncrement<T> {
             return;
         };
         self.test.close_block(cfg, mean, motion, limits);
-        if let Some(f) = self.relearn.as_mut() {
-            f.close_block_gated(cfg, mean, motion, limits, self.test.newest_ratio());
-            if f.learnt_enough(cfg) {
-                self.test.adopt_learnt(f);
-                self.relearn = None;
-            }
-        }
         // The aiding's motion is learnt on the blocks the test learns from:
         // quiet, no flag of the monitor.
         let learn = !external && self.test.quiet(cfg.learn_below);
@@ -428,10 +413,6 @@ impl<T: Real> VelocityIncrement<T> {
         if best != self.lag && new < cur * T::lit(LAG_SWITCH) {
             self.lag = best;
             self.test.clear_windows();
-            // What was learnt at the old lag describes another residual:
-            // learnt afresh, and judged with meanwhile (module notes of
-            // `block_test/relearn.rs`).
-            self.relearn = Some(self.test.fresh());
         }
     }
 }
