@@ -150,6 +150,19 @@ fn a_corrupt_imu_cell_is_a_missing_sample_with_a_warning() {
             let err = String::from_utf8_lossy(&out.stderr);
             assert!(out.status.success(), "{args:?}: {err}");
             assert_eq!(err.matches("line 4362").count(), 1, "{args:?}: {err}");
+            if args[0] == "parity-replay" {
+                // No alarm before the crash (239 s), as undamaged.
+                let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+                for kind in ["gyro", "accel"] {
+                    let early = v[kind]["alarms"]
+                        .as_array()
+                        .unwrap()
+                        .iter()
+                        .filter(|a| a["start_s"].as_f64().unwrap() < 239.0)
+                        .count();
+                    assert_eq!(early, 0, "{tag} {kind}");
+                }
+            }
         }
     }
     // Every cell of a column beyond the limit: a unit mix-up, refused.
