@@ -89,3 +89,98 @@ fn the_binary_replays_a_cut_log_and_warns_on_stderr() {
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(json["gyro"]["monitoring_from_s"].as_f64().is_some());
 }
+
+/// log171 with cell `col` of data row `row` replaced by `cell`.
+fn with_cell(row: usize, col: usize, cell: &str) -> String {
+    log171()
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i == row + 1 {
+                let mut c: Vec<&str> = l.split(',').collect();
+                c[col] = cell;
+                c.join(",")
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+#[test]
+fn a_corrupt_imu_cell_is_a_missing_sample_with_a_warning() {
+    // An `inf` or a huge value in one cell (a flipped bit, a logger's
+    // overflow) used to refuse the whole file; the binary logs' readers
+    // dropped such samples. Both CSV readers now read it as missing.
+    let good = read_imu_log(&write("good", &log171())).unwrap();
+    for (tag, cell) in [("inf", "inf"), ("huge", "-3.4e38")] {
+        // Data row 4360 is line 4362, t ≈ 150 s; column 8 is imu1_ay.
+        let p = write(tag, &with_cell(4360, 8, cell));
+        let log = read_imu_log(&p).unwrap();
+        assert_eq!(log.t, good.t, "{tag}");
+        assert!(log.imus[4360][1][1].is_nan(), "{tag}");
+        assert_eq!(log.imus[4361], good.imus[4361], "{tag}");
+        let w = log.warnings.join(" ");
+        assert!(
+            w.contains("read 1 IMU cells") && w.contains("line 4362, column 'imu1_ay'"),
+            "{w}"
+        );
+        // Through the binary, both replays run and warn once.
+        let aid = |f: &str| {
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../tests/data")
+                .join(f)
+                .to_string_lossy()
+                .into_owned()
+        };
+        let (gnss, att) = (
+            aid("ap_log171_gps_vel_ned.csv"),
+            aid("ap_log171_attitude_quat.csv"),
+        );
+        let p = p.to_str().unwrap();
+        for args in [
+            vec!["parity-replay", p, "--json"],
+            vec!["replay", p, "--gnss", &gnss, "--att", &att, "--json"],
+        ] {
+            let out = std::process::Command::new(env!("CARGO_BIN_EXE_imu-fdi-sim"))
+                .args(&args)
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(out.status.success(), "{args:?}: {err}");
+            assert_eq!(err.matches("line 4362").count(), 1, "{args:?}: {err}");
+            if args[0] == "parity-replay" {
+                // No alarm before the crash (239 s), as undamaged.
+                let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+                for kind in ["gyro", "accel"] {
+                    let early = v[kind]["alarms"]
+                        .as_array()
+                        .unwrap()
+                        .iter()
+                        .filter(|a| a["start_s"].as_f64().unwrap() < 239.0)
+                        .count();
+                    assert_eq!(early, 0, "{tag} {kind}");
+                }
+            }
+        }
+    }
+    // Every cell of a column beyond the limit: a unit mix-up, refused.
+    let text: String = log171()
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            let mut c: Vec<String> = l.split(',').map(String::from).collect();
+            if i > 0 {
+                c[3] = format!("{}", c[3].parse::<f64>().unwrap() * 1000.0);
+            }
+            c.join(",")
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let e = read_imu_log(&write("mm", &text)).unwrap_err().to_string();
+    assert!(
+        e.contains("column 'imu0_az'") && e.contains("unit mix-up"),
+        "{e}"
+    );
+}

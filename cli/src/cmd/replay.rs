@@ -315,7 +315,7 @@ pub(crate) fn run(args: Args) -> Result<()> {
             e
         }
     })?;
-    if let Some(why) = &s.ended_early {
+    for why in s.ended_early.iter().chain(&s.corrupt_cells) {
         eprintln!("warning: {why}");
     }
     note!(

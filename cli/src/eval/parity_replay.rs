@@ -64,7 +64,7 @@ pub fn read_imu_log(path: &Path) -> Result<ImuLog> {
         count: cols.len(),
         ..ImuLog::default()
     };
-    use crate::io::csv_checks::{check_imu_value, check_times, parse_cell, ColumnData};
+    use crate::io::csv_checks::{check_times, parse_cell, ColumnData};
     let names: Vec<Vec<String>> = (0..cols.len())
         .map(|k| AXES.iter().map(|a| format!("imu{k}_{a}")).collect())
         .collect();
@@ -88,9 +88,8 @@ pub fn read_imu_log(path: &Path) -> Result<ImuLog> {
             let mut v = [0.0; 6];
             for (ch, (slot, i)) in v.iter_mut().zip(c.iter()).enumerate() {
                 let name = &names[k][ch];
-                *slot = parse_cell(path, line, name, rec.get(*i))?;
-                check_imu_value(path, line, name, ch, *slot)?;
-                data.see(6 * k + ch, *slot);
+                let x = parse_cell(path, line, name, rec.get(*i))?;
+                *slot = data.screen_imu(6 * k + ch, line, x);
             }
             row.push(v);
         }
@@ -106,6 +105,7 @@ pub fn read_imu_log(path: &Path) -> Result<ImuLog> {
         );
     }
     data.check(path)?;
+    log.warnings.extend(data.warning(path));
     if let Some(line) = first_skipped {
         log.warnings.push(format!(
             "{}: read {} rows up to t = {} s; skipped {} rows whose `t` is empty, NaN or does not \

@@ -9,7 +9,7 @@ use anyhow::{bail, Context, Result};
 use imu_fdi::model::{AidingKind, CHANNEL_NAMES};
 
 use super::replay::{ReplayOptions, ReplaySummary, ATT_COLS, DVL_COLS, GNSS_COLS, IMU_COLS};
-use crate::io::csv_checks::{check_imu_value, check_times, parse_cell, ColumnData};
+use crate::io::csv_checks::{check_times, parse_cell, ColumnData};
 
 /// One input row.
 pub(super) struct Row {
@@ -104,13 +104,15 @@ pub(super) fn read_log(input: &Path, opts: &ReplayOptions, sum: &mut ReplaySumma
         let (line, rec) = row?;
         sum.rows += 1;
         let t = parse_cell(input, line, "t", rec.get(t_idx))?;
+        let mut imus: Vec<[f64; 6]> = Vec::with_capacity(imu_idx.len());
         for (k, idx) in imu_idx.iter().enumerate() {
-            for (ch, i) in idx.iter().enumerate() {
+            let mut v = [f64::NAN; 6];
+            for (ch, (i, slot)) in idx.iter().zip(v.iter_mut()).enumerate() {
                 let name = &imu_names[k][ch];
                 let x = parse_cell(input, line, name, rec.get(*i))?;
-                check_imu_value(input, line, name, ch, x)?;
-                data.see(6 * k + ch, x);
+                *slot = data.screen_imu(6 * k + ch, line, x);
             }
+            imus.push(v);
         }
         // Aiding cells: empty or NaN is "no sample"; text is an error.
         for (name, idx) in vel_cols
@@ -135,12 +137,6 @@ pub(super) fn read_log(input: &Path, opts: &ReplayOptions, sum: &mut ReplaySumma
         if opts.from_s.is_some_and(|f| t < f) || opts.to_s.is_some_and(|e| t > e) {
             continue;
         }
-        let imus = imu_idx
-            .iter()
-            .map(|idx| {
-                core::array::from_fn(|i| parse_opt(&rec, idx.get(i).copied()).unwrap_or(f64::NAN))
-            })
-            .collect();
         let mut z = [0.0; 6];
         let mut avail = [false; 6];
         for (i, idx) in vel_idx.iter().chain(att_idx.iter()).enumerate() {
@@ -178,6 +174,7 @@ pub(super) fn read_log(input: &Path, opts: &ReplayOptions, sum: &mut ReplaySumma
         );
     }
     data.check(input)?;
+    sum.corrupt_cells = data.warning(input);
     if !rows.iter().any(|r| r.avail.iter().any(|a| *a)) {
         bail!(
             "{}: no aiding in the file (every dvl_*, gnss_* and att_* cell empty or absent): \

@@ -62,6 +62,10 @@ pub struct ReplaySummary {
     /// Set when the CSV's last row was cut short (a log that ends
     /// mid-write) and dropped: one line naming the file and the line.
     pub ended_early: Option<String>,
+    /// Set when IMU cells were infinite or beyond the plausible range and
+    /// read as missing samples: one line naming the file, the count and
+    /// the first.
+    pub corrupt_cells: Option<String>,
     /// Aiding model detected from the columns.
     pub aiding: String,
     /// Tuning profile used (`Sim` or `Flight`).

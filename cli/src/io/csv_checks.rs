@@ -83,43 +83,33 @@ pub fn check_times(path: &Path, column: &str, times: &[(usize, f64)]) -> Result<
     Ok(())
 }
 
-/// Checks one IMU value read at `line`, `column` (channel 0–2 accel m/s²,
-/// 3–5 gyro rad/s): finite values above [`MAX_ACCEL`] / [`MAX_GYRO`] are
-/// errors (a unit mix-up or a corrupt cell); NaN is a gap and passes.
-pub fn check_imu_value(
-    path: &Path,
-    line: usize,
-    column: &str,
-    channel: usize,
-    x: f64,
-) -> Result<()> {
-    let (max, what) = if channel < 3 {
-        (MAX_ACCEL, "m/s²")
-    } else {
-        (MAX_GYRO, "rad/s")
-    };
-    if x.is_nan() || x.abs() <= max {
-        return Ok(());
-    }
-    bail!(
-        "{}: line {line}, column '{column}': {x} is not a plausible value (|x| ≤ {max} {what})",
-        path.display()
-    )
-}
-
-/// Counts finite values per column; a column that has none (all empty or
-/// NaN) is an error naming it.
+/// Counts each IMU column's finite values and screens its corrupt cells.
+///
+/// A cell that parses to an infinite number, or to one beyond
+/// [`MAX_ACCEL`] / [`MAX_GYRO`], is a corrupt cell (a flipped bit, a
+/// logger's overflow): it is read as a missing sample, as the DataFlash
+/// and ULog readers drop such samples, and counted for one warning. A
+/// column where such cells outnumber the plausible ones is an error (a
+/// unit mix-up: milli-g, millidegrees per second), as is a column without
+/// a finite value.
 #[derive(Debug, Clone)]
 pub struct ColumnData {
     names: Vec<String>,
     finite: Vec<usize>,
+    corrupt: Vec<usize>,
+    first_corrupt: Option<(usize, usize)>,
 }
 
 impl ColumnData {
     /// Columns to watch, by name.
     pub fn new(names: Vec<String>) -> Self {
-        let finite = vec![0; names.len()];
-        Self { names, finite }
+        let n = names.len();
+        Self {
+            names,
+            finite: vec![0; n],
+            corrupt: vec![0; n],
+            first_corrupt: None,
+        }
     }
 
     /// Records one value of column `k`.
@@ -129,15 +119,64 @@ impl ColumnData {
         }
     }
 
-    /// Error naming the file and the first column without a finite value.
+    /// Screens IMU value `x` of column `k`, read at `line`: channel
+    /// (`k % 6`) 0–2 accelerometer, m/s², 3–5 gyro, rad/s. Returns `x`,
+    /// or NaN (a missing sample) for a corrupt cell, and records it.
+    pub fn screen_imu(&mut self, k: usize, line: usize, x: f64) -> f64 {
+        let max = if k % 6 < 3 { MAX_ACCEL } else { MAX_GYRO };
+        let x = if x.is_nan() || x.abs() <= max {
+            x
+        } else {
+            if let Some(c) = self.corrupt.get_mut(k) {
+                *c += 1;
+            }
+            self.first_corrupt.get_or_insert((line, k));
+            f64::NAN
+        };
+        self.see(k, x);
+        x
+    }
+
+    /// Error naming the file and the first column without a finite value,
+    /// or whose corrupt cells outnumber its plausible ones.
     pub fn check(&self, path: &Path) -> Result<()> {
-        if let Some((name, _)) = self.names.iter().zip(&self.finite).find(|(_, n)| **n == 0) {
-            bail!(
-                "{}: column '{name}' has no numeric value (every cell empty or NaN)",
-                path.display()
-            );
+        for (k, name) in self.names.iter().enumerate() {
+            let finite = self.finite.get(k).copied().unwrap_or(0);
+            let corrupt = self.corrupt.get(k).copied().unwrap_or(0);
+            if corrupt > finite {
+                let (max, unit) = if k % 6 < 3 {
+                    (MAX_ACCEL, "m/s²")
+                } else {
+                    (MAX_GYRO, "rad/s")
+                };
+                bail!(
+                    "{}: column '{name}': {corrupt} of {} values are infinite or beyond ±{max} {unit} \
+                     (a unit mix-up?)",
+                    path.display(),
+                    corrupt + finite
+                );
+            }
+            if finite == 0 {
+                bail!(
+                    "{}: column '{name}' has no numeric value (every cell empty or NaN)",
+                    path.display()
+                );
+            }
         }
         Ok(())
+    }
+
+    /// One line naming the file, how many corrupt cells were read as
+    /// missing samples and the first of them; `None` without any.
+    pub fn warning(&self, path: &Path) -> Option<String> {
+        let (line, k) = self.first_corrupt?;
+        let n: usize = self.corrupt.iter().sum();
+        let name = self.names.get(k).map_or("?", String::as_str);
+        Some(format!(
+            "{}: read {n} IMU cells that are infinite or beyond ±{MAX_ACCEL} m/s² / ±{MAX_GYRO} rad/s \
+             as missing samples (the first at line {line}, column '{name}')",
+            path.display()
+        ))
     }
 }
 
@@ -211,7 +250,38 @@ mod tests {
         c.see(1, f64::NAN);
         let e = c.check(p).unwrap_err().to_string();
         assert!(e.contains("column 'b'"), "{e}");
-        assert!(check_imu_value(p, 3, "imu0_ax", 0, 1e308).is_err());
-        assert!(check_imu_value(p, 3, "imu0_ax", 0, f64::NAN).is_ok());
+    }
+
+    #[test]
+    fn corrupt_cells_are_missing_samples_and_a_unit_mix_up_is_an_error() {
+        let p = Path::new("x.csv");
+        // Six columns, one IMU: channel k % 6 (0–2 accel, 3–5 gyro).
+        let mut c = ColumnData::new((0..6).map(|i| format!("imu0_{i}")).collect());
+        for line in 2..12 {
+            assert_eq!(c.screen_imu(0, line, 9.8), 9.8);
+            assert_eq!(c.screen_imu(3, line, 0.1), 0.1);
+        }
+        assert!(c.screen_imu(0, 12, f64::INFINITY).is_nan());
+        assert!(c.screen_imu(3, 13, 250.0).is_nan());
+        assert!(c.screen_imu(0, 14, f64::NAN).is_nan());
+        for k in [1, 2, 4, 5] {
+            c.see(k, 1.0);
+        }
+        c.check(p).expect("two corrupt cells among ten good ones");
+        let w = c.warning(p).unwrap_or_default();
+        assert!(
+            w.contains("x.csv") && w.contains("read 2 IMU cells") && w.contains("line 12"),
+            "{w}"
+        );
+        // Milli-g: every accelerometer cell beyond the limit.
+        let mut m = ColumnData::new((0..6).map(|i| format!("imu0_{i}")).collect());
+        for line in 2..12 {
+            m.screen_imu(2, line, -9806.0);
+            for k in [0, 1, 3, 4, 5] {
+                m.see(k, 1.0);
+            }
+        }
+        let e = m.check(p).unwrap_err().to_string();
+        assert!(e.contains("imu0_2") && e.contains("10 of 10"), "{e}");
     }
 }

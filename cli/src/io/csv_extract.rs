@@ -177,7 +177,7 @@ pub fn csv_extracts_to_replay_csv(
             imu.display()
         )
     })?;
-    use super::csv_checks::{check_imu_value, check_times, parse_cell, ColumnData};
+    use super::csv_checks::{check_times, parse_cell, ColumnData};
     let header_name = |i: usize| h.get(i).unwrap_or("?").to_string();
     let time_name = header_name(ti);
     let names: Vec<[String; 6]> = layout.columns.iter().map(|c| c.map(header_name)).collect();
@@ -198,9 +198,7 @@ pub fn csv_extracts_to_replay_csv(
                     layout.gyro_scale
                 };
                 let x = parse_cell(imu, line, &names[k][i], r.get(c[i]))?;
-                *slot = x * scale * layout.signs[i];
-                check_imu_value(imu, line, &names[k][i], i, *slot)?;
-                data.see(6 * k + i, *slot);
+                *slot = data.screen_imu(6 * k + i, line, x * scale * layout.signs[i]);
             }
             sample.push(v);
         }
@@ -213,6 +211,7 @@ pub fn csv_extracts_to_replay_csv(
     }
     check_times(imu, &time_name, &times)?;
     data.check(imu)?;
+    cut.extend(data.warning(imu));
     let n = t.len();
     // Named here, on the input: the writer's own check can only name its
     // output file.
