@@ -184,3 +184,51 @@ fn a_corrupt_imu_cell_is_a_missing_sample_with_a_warning() {
         "{e}"
     );
 }
+
+#[test]
+fn rows_written_twice_are_read_once() {
+    // Every row doubled (a logger or an export writing each row twice):
+    // half the rows "did not increase in time", and both readers refused
+    // the file as unsorted. Identical rows are now skipped, with a warning.
+    let text = log171();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let doubled: String = std::iter::once(header.to_string())
+        .chain(lines.flat_map(|l| [l.to_string(), l.to_string()]))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let good = read_imu_log(&write("once", &text)).unwrap();
+    let log = read_imu_log(&write("twice", &doubled)).unwrap();
+    assert_eq!((log.t.clone(), log.imus.clone()), (good.t, good.imus));
+    let w = log.warnings.join(" ");
+    assert!(
+        w.contains("skipped 9521 rows identical") && w.contains("line 3"),
+        "{w}"
+    );
+    // The GNSS velocity file doubled, through the single-IMU replay.
+    let gnss = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/ap_log171_gps_vel_ned.csv"),
+    )
+    .unwrap();
+    let mut g = gnss.lines();
+    let gh = g.next().unwrap().to_string();
+    let gnss2: String = std::iter::once(gh)
+        .chain(g.flat_map(|l| [l.to_string(), l.to_string()]))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let gp = write("gnss_twice", &gnss2);
+    let imu = write("imu_once", &text);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_imu-fdi-sim"))
+        .args([
+            "replay",
+            imu.to_str().unwrap(),
+            "--gnss",
+            gp.to_str().unwrap(),
+        ])
+        .args(["--from", "100", "--to", "140", "--json"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("rows identical to the row before"), "{err}");
+}

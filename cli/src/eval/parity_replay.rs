@@ -96,7 +96,7 @@ pub fn read_imu_log(path: &Path) -> Result<ImuLog> {
         log.t.push(t);
         log.imus.push(row);
     }
-    log.warnings.extend(rows.cut_tail.take());
+    log.warnings.extend(rows.notes());
     check_times(path, "t", &times)?;
     if log.t.len() < 10 {
         bail!(

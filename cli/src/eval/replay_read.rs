@@ -163,7 +163,7 @@ pub(super) fn read_log(input: &Path, opts: &ReplayOptions, sum: &mut ReplaySumma
             truth,
         });
     }
-    sum.ended_early = csv_rows.cut_tail.take();
+    sum.ended_early = csv_rows.notes();
     check_times(input, "t", &times)?;
     if rows.len() < 10 {
         bail!(

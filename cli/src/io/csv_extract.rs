@@ -128,7 +128,7 @@ fn read_table(
         .by_ref()
         .map(|row| row.map(|(_, rec)| rec))
         .collect::<Result<Vec<_>>>()?;
-    cut.extend(records.cut_tail.take());
+    cut.extend(records.notes());
     Ok((headers, rows))
 }
 

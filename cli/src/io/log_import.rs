@@ -469,7 +469,11 @@ pub fn open_csv(path: &Path) -> Result<(csv::Reader<std::fs::File>, csv::StringR
 /// open) leaves a last row with fewer cells than the header: that row is
 /// dropped and [`CsvRows::cut_tail`] says so, as the binary log readers stop
 /// at a cut record. A row of the wrong length anywhere else is an error
-/// naming the file and the line, and so is a CSV syntax error.
+/// naming the file and the line, and so is a CSV syntax error. A row
+/// identical to the one before it, cell for cell (a logger or an export
+/// writing rows twice), is skipped and counted: it carries no sample, and
+/// counted as a time that does not increase it made a file whose every row
+/// was doubled look unsorted.
 pub struct CsvRows<'a> {
     records: std::iter::Peekable<csv::StringRecordsIter<'a, std::fs::File>>,
     path: &'a Path,
@@ -478,6 +482,9 @@ pub struct CsvRows<'a> {
     /// Set when the last row was cut short and dropped: one line naming the
     /// file, the line and the cells it had, for stderr.
     pub cut_tail: Option<String>,
+    previous: Option<csv::StringRecord>,
+    repeated: usize,
+    first_repeated: usize,
 }
 
 impl<'a> CsvRows<'a> {
@@ -490,7 +497,26 @@ impl<'a> CsvRows<'a> {
             width,
             line: 1,
             cut_tail: None,
+            previous: None,
+            repeated: 0,
+            first_repeated: 0,
         }
+    }
+
+    /// What the reader dropped, one line for stderr, once the rows are
+    /// read: the cut last row and the repeated rows skipped.
+    pub fn notes(&mut self) -> Option<String> {
+        let repeated = (self.repeated > 0).then(|| {
+            format!(
+                "{}: skipped {} rows identical to the row before them (the first at line {})",
+                self.path.display(),
+                self.repeated,
+                self.first_repeated
+            )
+        });
+        let notes: Vec<String> = self.cut_tail.take().into_iter().chain(repeated).collect();
+        self.repeated = 0;
+        (!notes.is_empty()).then(|| notes.join("; "))
     }
 }
 
@@ -498,21 +524,43 @@ impl Iterator for CsvRows<'_> {
     type Item = Result<(usize, csv::StringRecord)>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        let rec = self.records.next()?;
-        self.line += 1;
-        let line = self.line;
-        let rec = match rec {
-            Ok(rec) => rec,
-            Err(e) => {
-                return Some(Err(anyhow::Error::new(e).context(format!(
-                    "{}: bad CSV at line {line}",
-                    self.path.display()
-                ))))
+        loop {
+            let rec = self.records.next()?;
+            self.line += 1;
+            let line = self.line;
+            let rec = match rec {
+                Ok(rec) => rec,
+                Err(e) => {
+                    return Some(Err(anyhow::Error::new(e).context(format!(
+                        "{}: bad CSV at line {line}",
+                        self.path.display()
+                    ))))
+                }
+            };
+            if rec.len() != self.width {
+                return self.short_row(line, &rec);
             }
-        };
-        if rec.len() == self.width {
+            if self.previous.as_ref() == Some(&rec) {
+                if self.repeated == 0 {
+                    self.first_repeated = line;
+                }
+                self.repeated += 1;
+                continue;
+            }
+            self.previous = Some(rec.clone());
             return Some(Ok((line, rec)));
         }
+    }
+}
+
+impl CsvRows<'_> {
+    /// A row whose cell count is not the header's: the cut last row, or an
+    /// error naming the line.
+    fn short_row(
+        &mut self,
+        line: usize,
+        rec: &csv::StringRecord,
+    ) -> Option<Result<(usize, csv::StringRecord)>> {
         if rec.len() < self.width && self.records.peek().is_none() {
             self.cut_tail = Some(format!(
                 "{}: the last row (line {line}) has {} of {} cells: the log ends mid-row; read up \
