@@ -14,7 +14,10 @@
 # DATA (default tests/data) and IMU_CSV (default $DATA/ap_log171_3imu.csv)
 # point it at other copies of the extracts; BIN (default
 # ./target/release/imu-fdi-sim) runs another build of the tool, NOBUILD=1
-# skips the cargo build.
+# skips the cargo build. ATT_LATE (s, default 0) replays the attitude
+# aiding that much late: every time stamp of the attitude extract moved by
+# it (an aiding source with latency the monitor is not told about; with
+# `--aiding-delay auto` the UKF monitor estimates it).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 MON=${1:-ukf}
@@ -30,8 +33,20 @@ BIN=${BIN:-./target/release/imu-fdi-sim}
 [[ -n "${NOBUILD:-}" ]] || cargo build -q -p imu-fdi-cli --release --bin imu-fdi-sim
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
+ATT="$DATA/ap_log171_attitude_quat.csv"
+if [[ -n "${ATT_LATE:-}" ]]; then
+  python3 - "$ATT" "$TMP/att_late.csv" "$ATT_LATE" <<'PY'
+import csv, sys
+rows = list(csv.reader(open(sys.argv[1])))
+t = rows[0].index("time_s")
+for r in rows[1:]:
+    r[t] = "%.4f" % (float(r[t]) + float(sys.argv[3]))
+csv.writer(open(sys.argv[2], "w", newline="")).writerows(rows)
+PY
+  ATT="$TMP/att_late.csv"
+fi
 LOG=(replay "$IMU_CSV" --gnss "$DATA/ap_log171_gps_vel_ned.csv"
-  --att "$DATA/ap_log171_attitude_quat.csv" --from "$FROM" --to 235 --monitor "$MON" "$@")
+  --att "$ATT" --from "$FROM" --to 235 --monitor "$MON" "$@")
 $BIN "${LOG[@]}" --json 2>/dev/null >"$TMP/free.json"
 python3 - "$TMP/free.json" "$FROM" <<'PY'
 import json, sys

@@ -33,7 +33,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     ) {
         if self.attitude_rate_on() {
             let live = usable && self.att_rate_live();
-            self.att_rate.sample(imu, dt, live);
+            // Integrated at the aiding's latency, as the UKF fuses it.
+            self.att_rate
+                .sample_delayed(imu, dt, live, self.delay_steps);
         }
     }
 

@@ -416,3 +416,41 @@ fn f32_agrees_with_f64() {
         a64.test.detail.ratio
     );
 }
+
+/// Attitude aiding 0.2 s late (20 periods at 100 Hz) on a turning body
+/// with a gyro bias `b`: integrated at that latency the block means are
+/// `b` again (within 2 %, as on time); integrated on time they are off by
+/// the rate change over the lag, many times `b`.
+#[test]
+fn late_aiding_integrated_at_its_latency_gives_the_bias() {
+    let cfg = AttitudeRateConfig::<f64>::flight();
+    let b = Vector3::new(-1.0, 2.0, 0.5) * DEG;
+    let limits = ChannelLimits {
+        nominal: Vector3::from_element(1.0),
+        relevant: Vector3::zeros(),
+    };
+    let lag = 20;
+    let worst = |delay: usize| {
+        let mut ar = AttitudeRate::<f64>::new(cfg.alpha());
+        let (dt, mut q) = (0.01, UnitQuaternion::identity());
+        let mut truth = std::vec::Vec::new();
+        for i in 0..2000 {
+            let w = turning(i as f64 * dt);
+            q *= rotation_exp(&(w * dt));
+            truth.push(q);
+            let mut imu = ImuVec::<f64>::zeros();
+            imu.fixed_rows_mut::<3>(3).copy_from(&(w + b));
+            ar.sample_delayed(&imu, dt, true, delay);
+            if (i + 1) % 10 == 0 && i >= lag {
+                let (r, p, y) = truth[i - lag].euler_angles();
+                ar.epoch(&cfg, [r, p, y], &limits, 1.0, false);
+            }
+        }
+        (0..ar.test.filled)
+            .map(|a| (ar.test.blocks[ar.test.slot(a).unwrap()] - b).norm())
+            .fold(0.0, f64::max)
+    };
+    let (late, on_time) = (worst(lag), worst(0));
+    assert!(late < 0.02 * b.norm(), "{late} vs {}", b.norm());
+    assert!(on_time > 5.0 * b.norm(), "{on_time} vs {}", b.norm());
+}
