@@ -134,9 +134,9 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     /// until it is re-aligned, the UKF's innovations do not judge the
     /// accelerometers.
     velocity_tainted: bool,
-    /// The last re-alignment by the aiding's jump rule reset the velocity
-    /// alone, and the monitor has not judged every channel healthy since
-    /// (`velocity_tainted`).
+    /// In this episode (until every channel is judged healthy again) an
+    /// accelerometer was flagged before any gyro, or the aiding's jump
+    /// rule re-aligned the velocity alone (`velocity_tainted`).
     velocity_jumped: bool,
     /// Where the last predict's input Jacobian `B` was taken (the state
     /// before it and its attitude trigonometry): `B` is rebuilt from these

@@ -108,12 +108,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// (`realign_ended`, once no gyro channel is flagged), the
     /// accelerometers are judged by this test alone: a channel only the
     /// UKF's innovations flag is reported `NotMonitored`, and this test's
-    /// flags are merged into it. Not after the aiding's jump rule has
-    /// re-aligned the velocity alone in this episode (`velocity_jumped`):
-    /// the accelerometer went off first, and a gyro flag then is the
-    /// attitude the filter tilted to follow it (log171, IMU0 a_x +5 m/s²
-    /// for 5 s at 160 s: velocity re-aligned at 162 s, g_y flagged at
-    /// 165.1 s, a_x at 165.9 s). True while so; false without this test
+    /// flags are merged into it. Not when an accelerometer was flagged
+    /// first in this episode, or the aiding's jump rule re-aligned the
+    /// velocity alone (`velocity_jumped`): the accelerometer went off
+    /// first, and a gyro flag then is the attitude the filter tilted to
+    /// follow it (log171, IMU0 a_x +5 m/s² for 5 s at 160 s: velocity
+    /// re-aligned at 162 s, g_y flagged at 165.1 s, a_x at 165.9 s; at
+    /// 140 s: a_x flagged from 141.7 s, g_z at 144.1 s). True while so; false without this test
     /// (nothing else independent of the filter's attitude would judge the
     /// accelerometers).
     pub(in crate::monitor::ukf_monitor) fn velocity_tainted(&mut self) -> bool {
@@ -132,6 +133,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             .all(|s| matches!(s, ChannelState::Healthy))
         {
             self.velocity_jumped = false;
+        }
+        // An accelerometer flagged before any gyro is the episode's first
+        // fault, as a velocity the jump rule re-aligned alone.
+        if !self.velocity_tainted && self.report.status.iter().take(3).any(flagged) {
+            self.velocity_jumped = true;
         }
         if !self.velocity_jumped && self.report.status.iter().skip(3).any(flagged) {
             self.velocity_tainted = true;
