@@ -105,8 +105,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// 4–5 m/s² from 205.3 s while this test, which rotates the IMU's
     /// velocity increments with the aiding's attitude, saw a ratio ≤ 0.5 on
     /// both). From a gyro flag on until the velocity is re-aligned
-    /// (`realign_ended`, once no gyro channel is flagged), the
-    /// accelerometers are judged by this test alone: a channel only the
+    /// (`realign_ended`, with the attitude, once every gyro is judged
+    /// healthy again), the accelerometers are judged by this test alone:
+    /// a channel only the
     /// UKF's innovations flag is reported `NotMonitored`, and this test's
     /// flags are merged into it. Not when an accelerometer was flagged
     /// first in this episode, or the aiding's jump rule re-aligned the
@@ -114,9 +115,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// first, and a gyro flag then is the attitude the filter tilted to
     /// follow it (log171, IMU0 a_x +5 m/s² for 5 s at 160 s: velocity
     /// re-aligned at 162 s, g_y flagged at 165.1 s, a_x at 165.9 s; at
-    /// 140 s: a_x flagged from 141.7 s, g_z at 144.1 s). True while so; false without this test
-    /// (nothing else independent of the filter's attitude would judge the
-    /// accelerometers).
+    /// 140 s: a_x flagged from 141.7 s, g_z at 144.1 s). True while so;
+    /// false without this test (nothing else independent of the filter's
+    /// attitude would judge the accelerometers).
     pub(in crate::monitor::ukf_monitor) fn velocity_tainted(&mut self) -> bool {
         if !self.vel_inc_on() {
             return false;
