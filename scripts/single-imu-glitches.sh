@@ -5,8 +5,8 @@
 # One E1 step per replay: every IMU × channel (ax ay az gx gy gz), sizes
 # ACC_SIZES (m/s², default "3 5") and GYRO_SIZES (°/s, default "20 50"),
 # durations DURS (s, default "0.5 1 3 5"), onsets ONSETS (s, default
-# "120 160 200"), sign +1. Per size/duration it prints how many cases were
-# back to nominal within 5 s of the glitch's end (no flag on that IMU that
+# "120 160 200"), sign SIGN (1 or -1, default 1). Per size/duration it
+# prints how many cases were back to nominal within 5 s of the glitch's end (no flag on that IMU that
 # is not also in the fault-free replay), the worst time back, and how many
 # cascaded (a flag on another channel, or a new flag on the glitched
 # channel after the glitch ended, once it had been raised). A flag that
@@ -32,7 +32,7 @@ TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 python3 - "$BIN" "$MON" "$TMP" "$IMU_CSV" "$DATA" "${ACC_SIZES:-3 5}" \
   "${GYRO_SIZES:-20 50}" "${DURS:-0.5 1 3 5}" "${ONSETS:-120 160 200}" \
-  "${CASES:-0}" "$@" <<'PY'
+  "${CASES:-0}" "${SIGN:-1}" "$@" <<'PY'
 import csv, math, subprocess, sys
 from collections import defaultdict
 
@@ -42,7 +42,8 @@ GYR = [float(x) for x in sys.argv[7].split()]
 DURS = [float(x) for x in sys.argv[8].split()]
 ONSETS = [float(x) for x in sys.argv[9].split()]
 LIST = sys.argv[10] == "1"
-EXTRA = sys.argv[11:]
+SIGN = int(sys.argv[11])
+EXTRA = sys.argv[12:]
 CH = ["ax", "ay", "az", "gx", "gy", "gz"]
 SETTLE = 5.0
 
@@ -125,7 +126,7 @@ for kind, sizes in (("acc", ACC), ("gyro", GYR)):
                                     f"gyro = [{gyr}, 0.0, 0.0]\n"
                                     "f_unit = [1.0, 0.017453292519943295]\n"
                                     f"[[faults]]\nchannel = {ch}\nstart = {onset}\n"
-                                    f"end = {onset + dur}\nkind = \"E1\"\nsign = 1\n")
+                                    f"end = {onset + dur}\nkind = \"E1\"\nsign = {SIGN}\n")
                         rows = replay(f"{TMP}/inj.csv", f"{TMP}/f.toml", imu)
                         end = onset + dur
                         ev = [e for e in events(rows, imu) if e[2] > onset and new(e, imu)]

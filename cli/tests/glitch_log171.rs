@@ -156,3 +156,15 @@ fn otsukf_gx_20_deg_s_5_s_back_within_5_s() {
 fn ukf_ax_5_m_s2_1_s_back_within_5_s() {
     assert_glitch_recovers("ukf", (0, 5.0), 160.0, 1.0, 1.5, 5.0);
 }
+
+/// IMU0 g_y +50 °/s for 5 s at 200 s (UKF): the pitch error the glitch
+/// integrated leaks gravity into the filter's velocity, and the UKF's own
+/// test flagged a_z at 2.1 m/s² from 205.7 s to 208.7 s while the
+/// accelerometer/GNSS-velocity test saw ≤ 0.2 of its threshold. From the
+/// gyro flag on, the accelerometers are judged by that test alone until
+/// the velocity and attitude are re-aligned (`velocity_tainted`): g_y
+/// alone, 204.4–206.4 s.
+#[test]
+fn ukf_gy_50_deg_s_5_s_does_not_cascade_onto_a_z() {
+    assert_glitch_recovers("ukf", (4, 50.0), 200.0, 5.0, 0.0, 2.5);
+}

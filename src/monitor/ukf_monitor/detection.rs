@@ -74,7 +74,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                     self.not_judged();
                 }
                 self.att_rate_apply();
-                self.vel_inc_apply();
+                let tainted = self.velocity_tainted();
+                self.vel_inc_apply(tainted);
                 let f = if self.power_up.any() && !held {
                     instant(self)
                 } else {

@@ -129,6 +129,15 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     /// Each flag's estimate when it was raised (0 when not flagged): what
     /// the end-of-fault rule holds a fault still present to.
     flag_raised_at: [T; NZ],
+    /// The velocity was propagated through an attitude a flagged gyro
+    /// fault corrupted (`velocity_increment.rs`, `velocity_tainted`):
+    /// until it is re-aligned, the UKF's innovations do not judge the
+    /// accelerometers.
+    velocity_tainted: bool,
+    /// In this episode (until every channel is judged healthy again) an
+    /// accelerometer was flagged before any gyro, or the aiding's jump
+    /// rule re-aligned the velocity alone (`velocity_tainted`).
+    velocity_jumped: bool,
     /// Where the last predict's input Jacobian `B` was taken (the state
     /// before it and its attitude trigonometry): `B` is rebuilt from these
     /// when an estimate needs it, instead of a 36-value copy every IMU
@@ -226,6 +235,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             stats_holdoff: T::zero(),
             flagged_for: [T::zero(); NZ],
             flag_raised_at: [T::zero(); NZ],
+            velocity_tainted: false,
+            velocity_jumped: false,
             last_input_at: None,
             last_h: Mat6::identity(),
             last_dt: cfg.imu_period,
