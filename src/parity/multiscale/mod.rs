@@ -52,6 +52,7 @@ use crate::stats::{student_t_cornish_fisher, student_t_upper_quantile};
 
 mod carry;
 mod config;
+mod energy_range;
 mod lin;
 mod scale;
 mod staged;
@@ -353,30 +354,6 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         }
     }
 
-    /// Widens the learned range of the vibration regressors to `phi`'s.
-    fn widen_energy_range(&mut self, phi: &Phi<T>) {
-        let e = phi.fixed_rows::<VIBRATION_REGRESSORS>(FIRST_VIBRATION);
-        match &mut self.energy_range {
-            Some((lo, hi)) => {
-                for ((l, h), x) in lo.iter_mut().zip(hi.iter_mut()).zip(e.iter()) {
-                    *l = l.fmin(*x);
-                    *h = h.fmax(*x);
-                }
-            }
-            None => self.energy_range = Some((e.into_owned(), e.into_owned())),
-        }
-    }
-
-    /// `phi`'s vibration regressors are all within the range the
-    /// calibration has learned (true before any learning).
-    fn within_learned_energy(&self, phi: &Phi<T>) -> bool {
-        self.energy_range.as_ref().is_none_or(|(lo, hi)| {
-            let e = phi.iter().skip(FIRST_VIBRATION);
-            e.zip(lo.iter().zip(hi.iter()))
-                .all(|(x, (l, h))| *x >= *l && *x <= *h)
-        })
-    }
-
     /// The calibration's Cholesky factor of `sxx + ridge` (the reference
     /// the in-place [`factor_calibration`](Self::factor_calibration) is
     /// checked against).
@@ -535,38 +512,6 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             }
         }
         Some(s / T::lit(len as f64))
-    }
-
-    /// Mean of the newest `len` unclipped, unstandardised residuals over
-    /// the blocks whose vibration regressors were within the range the
-    /// calibration had learned (`None` before `len` blocks, or when none
-    /// was). The nine energy regressors are nearly collinear and their
-    /// coefficients poorly determined: beyond the range learned the
-    /// prediction extrapolates. The window tests carry that uncertainty
-    /// (`φ̄ᵀPφ̄ Σ_b`) and clip the block; the gross test alarms at once,
-    /// without either, so it rests on the blocks the calibration predicts
-    /// from what it has seen. On log171 at 99 Hz one +3.9 m/s² sample took
-    /// IMU2 a_z's energy to ≈ 0.93 (learned ≈ 0.01–0.1) and the reduced
-    /// set's frozen calibration predicted that block ≈ 1 m/s² off: a gross
-    /// alarm naming that healthy sensor. A fault far beyond any vibration
-    /// excursion lasts into blocks of ordinary vibration (a step or a
-    /// glitch raises a sensor's energy only in the blocks it starts and
-    /// ends in).
-    fn raw_mean_learned(&self, len: usize) -> Option<SVector<T, N>> {
-        if len == 0 || self.filled < len {
-            return None;
-        }
-        let mut s = SVector::<T, N>::zeros();
-        let mut kept = 0usize;
-        let mut idx = self.head;
-        for _ in 0..len {
-            idx = (idx + W - 1) % W.max(1);
-            if let (Some(r), Some(true)) = (self.raw.get(idx), self.learned_range.get(idx)) {
-                s += r;
-                kept += 1;
-            }
-        }
-        (kept > 0).then(|| s / T::lit(kept as f64))
     }
 
     /// Per-sensor relative bias the calibration has absorbed: the suspect
