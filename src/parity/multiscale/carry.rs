@@ -71,6 +71,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         self.since_snap = 0;
         self.ridge = src.ridge;
         self.x_ref = src.x_ref;
+        self.energy_range = src.energy_range;
         self.block_cov = src.block_cov;
         self.window_cov = src.window_cov;
         self.scale = src.scale;

@@ -52,6 +52,7 @@ use crate::stats::{student_t_cornish_fisher, student_t_upper_quantile};
 
 mod carry;
 mod config;
+mod energy_range;
 mod lin;
 mod scale;
 mod staged;
@@ -77,6 +78,13 @@ const _: () = assert!(SCALES <= 8);
 pub const TRANSFORM_PARTS: usize = 1 + SCALES.div_ceil(2);
 
 type Phi<T> = SVector<T, REGRESSORS>;
+/// Lowest and highest value of each vibration regressor learned.
+type EnergyRange<T> = (
+    SVector<T, VIBRATION_REGRESSORS>,
+    SVector<T, VIBRATION_REGRESSORS>,
+);
+/// Index of the first vibration regressor in `φ`.
+const FIRST_VIBRATION: usize = REGRESSORS - VIBRATION_REGRESSORS;
 /// A window's mean residual, mean regressor and mean gain.
 type WindowMean<T, const N: usize> = (SVector<T, N>, Phi<T>, T);
 
@@ -121,6 +129,10 @@ pub struct Multiscale<T: Real, const N: usize, const W: usize> {
     /// References the motion and vibration regressors are centred on
     /// (first block).
     x_ref: Option<(Vector3<T>, SVector<T, VIBRATION_REGRESSORS>)>,
+    /// Range of the vibration regressors (`e − e_ref`) the calibration has
+    /// learned, lowest and highest (`None` before its first block); see
+    /// [`within_learned_energy`](Self::within_learned_energy).
+    energy_range: Option<EnergyRange<T>>,
     /// Block covariance of the residual (padded with identity beyond `dim`).
     block_cov: SMatrix<T, N, N>,
     /// Covariance of the window mean at each length.
@@ -145,6 +157,10 @@ pub struct Multiscale<T: Real, const N: usize, const W: usize> {
     /// variance_blocks)`).
     updates: u32,
     regressors: [Phi<T>; W],
+    /// Each stored block's vibration regressors were within the range the
+    /// calibration had learned when it predicted the block (see
+    /// [`raw_mean_learned`](Self::raw_mean_learned)).
+    learned_range: [bool; W],
     /// Mahalanobis norms² of the stored blocks (block-covariance units,
     /// before clipping) and the window means their decisions saw: the
     /// covariances learn a block only once it leaves the ring, after every
@@ -220,6 +236,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             spx: SMatrix::zeros(),
             ridge,
             x_ref: None,
+            energy_range: None,
             block_cov: SMatrix::identity(),
             window_cov: [SMatrix::identity(); SCALES],
             scale: VibrationScale::default(),
@@ -229,6 +246,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
             raw: [SVector::zeros(); W],
             updates: 0,
             regressors: [Phi::zeros(); W],
+            learned_range: [true; W],
             norms: [T::zero(); W],
             decided_means: [[SVector::zeros(); SCALES]; W],
             decided_set: [0; W],
@@ -299,6 +317,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         // reads no more); `spx` rows beyond `dim` are zero (so are `p`'s).
         // `sxx` changes: the factor kept in the work is stale.
         self.cal_current = false;
+        self.widen_energy_range(phi);
         let lambda = T::one() - T::one() / self.cfg.calibration_blocks;
         let dim = self.dim.min(N);
         let phis = phi.as_slice();
@@ -429,6 +448,10 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         }
         if let Some(slot) = self.regressors.get_mut(self.head) {
             *slot = *phi;
+        }
+        let within = self.within_learned_energy(phi);
+        if let Some(slot) = self.learned_range.get_mut(self.head) {
+            *slot = within;
         }
         self.head = (self.head + 1) % W.max(1);
         self.filled = (self.filled + 1).min(W);

@@ -396,7 +396,8 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// threshold.
     fn gross_test(&mut self, v: &SMatrix<T, N, N>, active: &[bool; N]) {
         let short = usize::from(self.cfg.scales[0]);
-        let (Some(rbar), Some(cov)) = (self.raw_mean(short, false), self.window_cov.first()) else {
+        let (Some(rbar), Some(cov)) = (self.raw_mean_learned(short), self.window_cov.first())
+        else {
             return;
         };
         let Some(l) = self.short_factor.get(cov, self.dim) else {
