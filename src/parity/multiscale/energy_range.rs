@@ -47,19 +47,13 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
     /// glitch raises a sensor's energy only in the blocks it starts and
     /// ends in).
     pub(super) fn raw_mean_learned(&self, len: usize) -> Option<SVector<T, N>> {
-        if len == 0 || self.filled < len {
-            return None;
-        }
-        let mut s = SVector::<T, N>::zeros();
-        let mut kept = 0usize;
-        let mut idx = self.head;
-        for _ in 0..len {
-            idx = (idx + W - 1) % W.max(1);
-            if let (Some(r), Some(true)) = (self.raw.get(idx), self.learned_range.get(idx)) {
-                s += r;
-                kept += 1;
-            }
-        }
-        (kept > 0).then(|| s / T::lit(kept as f64))
+        self.ring_mean(len, |idx| {
+            self.learned_range
+                .get(idx)
+                .copied()
+                .unwrap_or(false)
+                .then(|| self.raw.get(idx).copied())
+                .flatten()
+        })
     }
 }

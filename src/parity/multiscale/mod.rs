@@ -493,25 +493,37 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         }
     }
 
-    /// Mean of the newest `len` unclipped residuals, in sensor units or
-    /// (`standardised`) each times its own block's gain; `None` until `len`
-    /// blocks are stored.
-    fn raw_mean(&self, len: usize, standardised: bool) -> Option<SVector<T, N>> {
+    /// Mean of the newest `len` unclipped residuals, each times its own
+    /// block's gain (standardised); `None` until `len` blocks are stored.
+    fn raw_mean(&self, len: usize) -> Option<SVector<T, N>> {
+        self.ring_mean(len, |idx| {
+            let r = self.raw.get(idx)?;
+            Some(self.gains.get(idx).map_or(*r, |g| r * *g))
+        })
+    }
+
+    /// Mean of `value` over the newest `len` stored blocks (ring slots,
+    /// newest first) where it gives one; `None` until `len` blocks are
+    /// stored or when it gives none.
+    fn ring_mean(
+        &self,
+        len: usize,
+        value: impl Fn(usize) -> Option<SVector<T, N>>,
+    ) -> Option<SVector<T, N>> {
         if len == 0 || self.filled < len {
             return None;
         }
         let mut s = SVector::<T, N>::zeros();
+        let mut kept = 0usize;
         let mut idx = self.head;
         for _ in 0..len {
             idx = (idx + W - 1) % W.max(1);
-            if let Some(r) = self.raw.get(idx) {
-                match self.gains.get(idx) {
-                    Some(g) if standardised => s += r * *g,
-                    _ => s += r,
-                }
+            if let Some(r) = value(idx) {
+                s += r;
+                kept += 1;
             }
         }
-        Some(s / T::lit(len as f64))
+        (kept > 0).then(|| s / T::lit(kept as f64))
     }
 
     /// Per-sensor relative bias the calibration has absorbed: the suspect

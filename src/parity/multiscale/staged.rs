@@ -364,7 +364,7 @@ impl<T: Real, const N: usize, const W: usize> Multiscale<T, N, W> {
         // gyro step flights with a false alarm were 2/2/2/2 of 36 per size
         // instead of 1/1/2/1).
         if ratio > T::one() && i >= 1 {
-            if let Some(u) = self.raw_mean(usize::from(*len), true) {
+            if let Some(u) = self.raw_mean(usize::from(*len)) {
                 if let (Some((ku, su, _)), second_u) = best_two(l, v, &u, active, self.dim) {
                     if ku == k {
                         margin = margin.max(su - second_u);
