@@ -432,6 +432,26 @@ fn parity_realistic_rejects_flights_of_no_hours() {
 }
 
 #[test]
+fn parity_realistic_rejects_a_false_alarm_or_size_out_of_range() {
+    for (opt, bad) in [
+        ("--false-alarm", "0"),
+        ("--false-alarm", "0.7"),
+        ("--false-alarm", "NaN"),
+        ("--sizes", "1,-2"),
+        ("--sizes", "inf"),
+    ] {
+        let o = bin()
+            .args(["parity-realistic", "--hours", "0", "--rounds", "1"])
+            .args([opt, bad])
+            .output()
+            .unwrap();
+        assert!(!o.status.success(), "{opt} {bad}");
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(e.contains(opt) && e.lines().count() == 1, "{e}");
+    }
+}
+
+#[test]
 fn parity_realistic_rejects_a_step_onset_inside_training() {
     for bad in ["10", "NaN", "1e9"] {
         let o = bin()
