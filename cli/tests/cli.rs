@@ -464,3 +464,28 @@ fn parity_realistic_rejects_a_step_onset_inside_training() {
         assert!(e.contains("--step-onset") && e.lines().count() == 1, "{e}");
     }
 }
+
+#[test]
+fn parity_table_and_replay_reject_a_false_alarm_out_of_range() {
+    let log = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/ap_log171_3imu.csv"
+    );
+    for args in [
+        vec!["parity-table", log, "--size", "1", "--false-alarm", "0.5"],
+        vec!["parity-replay", log, "--false-alarm=-1"],
+        vec![
+            "parity-replay",
+            log,
+            "--method",
+            "glt-cusum",
+            "--false-alarm",
+            "1e-8",
+        ],
+    ] {
+        let o = bin().args(&args).output().unwrap();
+        assert!(!o.status.success(), "{args:?}");
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(e.contains("--false-alarm") && e.lines().count() == 1, "{e}");
+    }
+}

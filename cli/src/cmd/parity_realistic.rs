@@ -172,6 +172,7 @@ pub(crate) fn run(a: Args) -> Result<()> {
             steps_json.push(serde_json::json!({
                 format!("size_{}", if unit == "°/s" { "deg_s" } else { "m_s2" }): s,
                 "isolated": r.isolated,
+                "detected": r.detected,
                 "cases": r.cases,
                 "flights_with_false_alarm": r.false_alarms,
                 "median_delay_s": med,
@@ -180,9 +181,10 @@ pub(crate) fn run(a: Args) -> Result<()> {
                 continue;
             }
             out!(
-                "  step {s} {unit}: {}/{} isolated within 10 s, {} flights with a false alarm, median delay {}",
+                "  step {s} {unit}: {}/{} isolated within 10 s ({} detected), {} flights with a false alarm, median delay {}",
                 r.isolated,
                 r.cases,
+                r.detected,
                 r.false_alarms,
                 med.map_or("-".into(), |d| format!("{d:.1} s"))
             );

@@ -48,6 +48,9 @@ pub struct Steps {
     pub isolated: usize,
     /// Cases with an alarm outside the fault or a healthy sensor isolated.
     pub false_alarms: usize,
+    /// Detected: an alarm rose within [`ISOLATE_WITHIN_S`] of onset, no
+    /// other alarm in the flight (isolated or not).
+    pub detected: usize,
     /// Delays of the isolations, s (sorted).
     pub delays: Vec<f64>,
 }
@@ -355,17 +358,25 @@ pub fn steps_on(
                 .map(|(_, t)| t - onset);
             let wrong = iso.iter().any(|(k, _)| *k != sensor);
             let outside = alarms.iter().any(|t| *t < onset || *t > onset + 15.0);
-            Ok((hit, wrong || outside))
+            let alarmed = alarms
+                .iter()
+                .any(|t| *t >= onset && *t < onset + ISOLATE_WITHIN_S);
+            Ok((hit, alarmed, wrong || outside))
         })
         .collect::<Result<_>>()?;
     let mut out = Steps {
         cases: results.len(),
         ..Steps::default()
     };
-    for (hit, fa) in results {
+    for (hit, alarmed, fa) in results {
         if fa {
             out.false_alarms += 1;
-        } else if let Some(d) = hit {
+            continue;
+        }
+        if alarmed || hit.is_some() {
+            out.detected += 1;
+        }
+        if let Some(d) = hit {
             out.isolated += 1;
             out.delays.push(d);
         }
