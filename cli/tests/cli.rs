@@ -432,6 +432,26 @@ fn parity_realistic_rejects_flights_of_no_hours() {
 }
 
 #[test]
+fn parity_realistic_rejects_a_false_alarm_or_size_out_of_range() {
+    for (opt, bad) in [
+        ("--false-alarm", "0"),
+        ("--false-alarm", "0.7"),
+        ("--false-alarm", "NaN"),
+        ("--sizes", "1,-2"),
+        ("--sizes", "inf"),
+    ] {
+        let o = bin()
+            .args(["parity-realistic", "--hours", "0", "--rounds", "1"])
+            .args([opt, bad])
+            .output()
+            .unwrap();
+        assert!(!o.status.success(), "{opt} {bad}");
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(e.contains(opt) && e.lines().count() == 1, "{e}");
+    }
+}
+
+#[test]
 fn parity_realistic_rejects_a_step_onset_inside_training() {
     for bad in ["10", "NaN", "1e9"] {
         let o = bin()
@@ -442,5 +462,30 @@ fn parity_realistic_rejects_a_step_onset_inside_training() {
         assert!(!o.status.success(), "{bad}");
         let e = String::from_utf8_lossy(&o.stderr);
         assert!(e.contains("--step-onset") && e.lines().count() == 1, "{e}");
+    }
+}
+
+#[test]
+fn parity_table_and_replay_reject_a_false_alarm_out_of_range() {
+    let log = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/ap_log171_3imu.csv"
+    );
+    for args in [
+        vec!["parity-table", log, "--size", "1", "--false-alarm", "0.5"],
+        vec!["parity-replay", log, "--false-alarm=-1"],
+        vec![
+            "parity-replay",
+            log,
+            "--method",
+            "glt-cusum",
+            "--false-alarm",
+            "1e-8",
+        ],
+    ] {
+        let o = bin().args(&args).output().unwrap();
+        assert!(!o.status.success(), "{args:?}");
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(e.contains("--false-alarm") && e.lines().count() == 1, "{e}");
     }
 }

@@ -249,4 +249,23 @@ fn parity_realistic() {
         "--json",
     ]);
     assert_eq!(v["kinds"][0]["steps"].as_array().unwrap().len(), 4);
+    assert!(v["kinds"][0]["false_alarm"].is_null());
+    let v = json(&[
+        "parity-realistic",
+        "--hours",
+        "0",
+        "--rounds",
+        "1",
+        "--kind",
+        "accel",
+        "--false-alarm",
+        "1e-8",
+        "--sizes",
+        "1.5",
+        "--json",
+    ]);
+    assert_eq!(v["kinds"][0]["false_alarm"].as_f64(), Some(1e-8));
+    let steps = v["kinds"][0]["steps"].as_array().unwrap();
+    assert_eq!(steps.len(), 1);
+    assert_eq!(steps[0]["size_m_s2"].as_f64(), Some(1.5));
 }

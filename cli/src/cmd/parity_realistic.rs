@@ -47,6 +47,16 @@ pub(crate) struct Args {
     /// drifted from its mean over the 2 minutes before.
     #[arg(long)]
     events: bool,
+    /// The multi-scale tests' per-decision false-alarm probability
+    /// (default: the flight configuration's, 1e-6): lower trades
+    /// sensitivity for fewer false alarms (`scripts/parity-min-detectable.sh`
+    /// sweeps it).
+    #[arg(long)]
+    false_alarm: Option<f64>,
+    /// Step sizes, comma-separated (°/s for gyros, m/s² for
+    /// accelerometers; default 0.5,1,2,3 and 0.1,0.2,0.3,0.5).
+    #[arg(long, value_delimiter = ',')]
+    sizes: Option<Vec<f64>>,
     /// One JSON object on stdout instead of text (docs/cli-json.md).
     #[arg(long)]
     json: bool,
@@ -69,6 +79,19 @@ pub(crate) fn run(a: Args) -> Result<()> {
             TRAIN_S + 5.0
         );
     }
+    if let Some(p) = a.false_alarm {
+        if !(p > 0.0 && p < 0.5) {
+            bail!("--false-alarm: {p} is not a probability in (0, 0.5)");
+        }
+    }
+    if let Some(bad) = a
+        .sizes
+        .iter()
+        .flatten()
+        .find(|s| !(s.is_finite() && **s > 0.0))
+    {
+        bail!("--sizes: {bad} is not a positive step size");
+    }
     if a.flight_hours == 0 {
         bail!("--flight-hours: must be at least 1");
     }
@@ -80,7 +103,14 @@ pub(crate) fn run(a: Args) -> Result<()> {
     };
     let mut kinds_json = Vec::new();
     for &kind in kinds {
-        let ff = fault_free_flights_on(&profile, kind, flights, a.flight_hours, a.fault_free_seed)?;
+        let ff = fault_free_flights_on(
+            &profile,
+            kind,
+            flights,
+            a.flight_hours,
+            a.fault_free_seed,
+            a.false_alarm,
+        )?;
         let mut steps_json = Vec::new();
         if !a.json {
             out!(
@@ -120,20 +150,29 @@ pub(crate) fn run(a: Args) -> Result<()> {
                 }
             }
         }
-        let (unit, sizes): (&str, &[f64]) = match kind {
+        let (unit, default_sizes): (&str, &[f64]) = match kind {
             ArrayKind::Gyro => ("°/s", &[0.5, 1.0, 2.0, 3.0]),
             ArrayKind::Accel => ("m/s²", &[0.1, 0.2, 0.3, 0.5]),
         };
-        for &s in sizes {
+        for &s in a.sizes.as_deref().unwrap_or(default_sizes) {
             let si = match kind {
                 ArrayKind::Gyro => s.to_radians(),
                 ArrayKind::Accel => s,
             };
-            let r = steps_on(&profile, kind, si, a.rounds, a.step_seed, a.step_onset)?;
+            let r = steps_on(
+                &profile,
+                kind,
+                si,
+                a.rounds,
+                a.step_seed,
+                a.step_onset,
+                a.false_alarm,
+            )?;
             let med = r.delays.get(r.delays.len() / 2).copied();
             steps_json.push(serde_json::json!({
                 format!("size_{}", if unit == "°/s" { "deg_s" } else { "m_s2" }): s,
                 "isolated": r.isolated,
+                "detected": r.detected,
                 "cases": r.cases,
                 "flights_with_false_alarm": r.false_alarms,
                 "median_delay_s": med,
@@ -142,9 +181,10 @@ pub(crate) fn run(a: Args) -> Result<()> {
                 continue;
             }
             out!(
-                "  step {s} {unit}: {}/{} isolated within 10 s, {} flights with a false alarm, median delay {}",
+                "  step {s} {unit}: {}/{} isolated within 10 s ({} detected), {} flights with a false alarm, median delay {}",
                 r.isolated,
                 r.cases,
+                r.detected,
                 r.false_alarms,
                 med.map_or("-".into(), |d| format!("{d:.1} s"))
             );
@@ -153,6 +193,7 @@ pub(crate) fn run(a: Args) -> Result<()> {
             "kind": if kind == ArrayKind::Gyro { "gyro" } else { "accel" },
             "integrated": a.integrated,
             "step_onset_s": a.step_onset,
+            "false_alarm": a.false_alarm,
             "fault_free_h": ff.hours,
             "fault_free_flight_h": a.flight_hours,
             "fault_free_alarm_events": ff.alarm_events,

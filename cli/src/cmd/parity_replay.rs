@@ -24,6 +24,10 @@ pub(crate) struct Args {
     /// simulator's white-noise χ²/CUSUM with calibrated thresholds).
     #[arg(long, default_value = "flight")]
     method: String,
+    /// With `--method flight`: the multi-scale tests' per-decision
+    /// false-alarm probability (default 1e-6).
+    #[arg(long)]
+    false_alarm: Option<f64>,
     /// One bias to inject: IMU,CHANNEL,SIZE,START or IMU,CHANNEL,SIZE,START,END (channel 0–5 =
     /// ax ay az gx gy gz; size in m/s² or °/s; times in s of the log).
     #[arg(long, value_delimiter = ',')]
@@ -81,9 +85,25 @@ fn injection(v: &[f64]) -> Result<Option<imu_fdi_cli::eval::parity_replay::Injec
     }
 }
 
+/// The method with `--false-alarm` applied (flight only).
+fn method_at(
+    name: &str,
+    false_alarm: Option<f64>,
+) -> Result<imu_fdi_cli::eval::parity_replay::ParityMethod> {
+    use imu_fdi_cli::eval::parity_replay::ParityMethod;
+    match (method(name)?, false_alarm) {
+        (m, None) => Ok(m),
+        (ParityMethod::Flight, Some(p)) if p > 0.0 && p < 0.5 => Ok(ParityMethod::FlightAt(p)),
+        (ParityMethod::Flight, Some(p)) => {
+            anyhow::bail!("--false-alarm: {p} is not a probability in (0, 0.5)")
+        }
+        (_, Some(_)) => anyhow::bail!("--false-alarm applies to --method flight only"),
+    }
+}
+
 /// Runs `parity-replay`.
 pub(crate) fn run(args: Args) -> Result<()> {
-    let method = method(&args.method)?;
+    let method = method_at(&args.method, args.false_alarm)?;
     let inj = injection(&args.inject)?;
     if args.json {
         let log = imu_fdi_cli::eval::parity_replay::read_any_imu_log(&args.input)?;

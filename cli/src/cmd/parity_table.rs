@@ -6,7 +6,7 @@ use anyhow::{bail, Result};
 
 use hal_sim::array::ArrayKind;
 use imu_fdi_cli::eval::parity_replay::{
-    format_step_table, power_up_table, read_any_imu_log, step_table,
+    format_step_table, power_up_table, read_any_imu_log, step_table, ParityMethod,
 };
 
 // The arguments of `parity-table` (help on `Cmd::ParityTable` in main.rs).
@@ -38,6 +38,10 @@ pub(crate) struct Args {
     /// power-up), isolated within 10 s of monitoring start.
     #[arg(long)]
     power_up: bool,
+    /// The multi-scale tests' per-decision false-alarm probability
+    /// (default: the flight configuration's, 1e-6).
+    #[arg(long)]
+    false_alarm: Option<f64>,
     /// One JSON object on stdout instead of text (docs/cli-json.md).
     #[arg(long)]
     json: bool,
@@ -54,6 +58,11 @@ pub(crate) fn run(a: Args) -> Result<()> {
     if !a.size.is_finite() || a.size <= 0.0 {
         bail!("--size must be a positive number, got {}", a.size);
     }
+    let method = match a.false_alarm {
+        None => ParityMethod::Flight,
+        Some(p) if p > 0.0 && p < 0.5 => ParityMethod::FlightAt(p),
+        Some(p) => bail!("--false-alarm: {p} is not a probability in (0, 0.5)"),
+    };
     let size = match kind {
         ArrayKind::Gyro => a.size.to_radians(),
         ArrayKind::Accel => a.size,
@@ -82,7 +91,7 @@ pub(crate) fn run(a: Args) -> Result<()> {
         "accel"
     };
     if a.power_up {
-        let cases = power_up_table(&log, kind, size, &a.train_starts, a.train_s, a.end)?;
+        let cases = power_up_table(&log, kind, size, &a.train_starts, a.train_s, a.end, method)?;
         let ok = cases.iter().filter(|c| c.delay.is_some()).count();
         let wrong = cases.iter().filter(|c| c.wrong_isolation).count();
         if a.json {
@@ -123,6 +132,7 @@ pub(crate) fn run(a: Args) -> Result<()> {
         &a.onsets,
         a.duration,
         a.end,
+        method,
     )?;
     if a.json {
         let rows: Vec<serde_json::Value> = cases

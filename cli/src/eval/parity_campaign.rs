@@ -48,15 +48,24 @@ pub struct Steps {
     pub isolated: usize,
     /// Cases with an alarm outside the fault or a healthy sensor isolated.
     pub false_alarms: usize,
+    /// Detected: an alarm rose within [`ISOLATE_WITHIN_S`] of onset, no
+    /// other alarm in the flight (isolated or not).
+    pub detected: usize,
     /// Delays of the isolations, s (sorted).
     pub delays: Vec<f64>,
 }
 
-fn config(kind: ArrayKind, rate: f64) -> ParityConfig<f32> {
-    match kind {
+/// The flight configuration of `kind` at `rate`; `false_alarm` replaces
+/// the multi-scale tests' per-decision false-alarm probability.
+fn config(kind: ArrayKind, rate: f64, false_alarm: Option<f64>) -> ParityConfig<f32> {
+    let mut cfg = match kind {
         ArrayKind::Gyro => ParityConfig::gyro_flight(rate, 2000f32.to_radians()),
         ArrayKind::Accel => ParityConfig::accel_flight(rate, 16.0 * imu_fdi::model::G0 as f32),
+    };
+    if let Some(p) = false_alarm {
+        cfg.multiscale.false_alarm = p;
     }
+    cfg
 }
 
 /// One alarm event of a flight, with what the monitor saw and what the
@@ -123,10 +132,11 @@ fn run(
     profile: &RealisticProfile,
     seed: u64,
     fault: Option<ChannelFault>,
+    false_alarm: Option<f64>,
 ) -> Result<Flight> {
     let geometry = Geometry::<f32, 9>::triads(&[Matrix3::identity(); 3])
         .map_err(|e| anyhow!("array geometry: {e:?}"))?;
-    let mut cfg = config(kind, profile.log_hz);
+    let mut cfg = config(kind, profile.log_hz, false_alarm);
     cfg.train_samples = (TRAIN_S * profile.log_hz).round() as u32;
     let mut monitor = ParityMonitor::<f32, 9, 40>::new(&geometry, cfg)
         .map_err(|e| anyhow!("parity configuration: {e:?}"))?;
@@ -249,24 +259,26 @@ pub fn fault_free_on(
     hours: u32,
     seed: u64,
 ) -> Result<FaultFree> {
-    fault_free_flights_on(profile, kind, hours, 1, seed)
+    fault_free_flights_on(profile, kind, hours, 1, seed, None)
 }
 
 /// [`fault_free_on`] with `flights` flights of `flight_hours` hours each
 /// (seeds `seed..`): what the monitor learns over more than an hour (e.g.
 /// the vibration law's level, docs/parity-real-flights.md) only shows in
-/// flights that long.
+/// flights that long. `false_alarm` replaces the multi-scale tests'
+/// per-decision false-alarm probability (`None`: the flight default).
 pub fn fault_free_flights_on(
     profile: &RealisticProfile,
     kind: ArrayKind,
     flights: u32,
     flight_hours: u32,
     seed: u64,
+    false_alarm: Option<f64>,
 ) -> Result<FaultFree> {
     let profile = profile.with_duration(3600.0 * f64::from(flight_hours) + TRAIN_S);
     let runs: Vec<_> = (0..u64::from(flights))
         .into_par_iter()
-        .map(|i| run(kind, &profile, seed + i, None))
+        .map(|i| run(kind, &profile, seed + i, None, false_alarm))
         .collect::<Result<_>>()?;
     Ok(runs
         .iter()
@@ -296,6 +308,7 @@ pub fn steps(kind: ArrayKind, size: f64, seeds: u64, seed: u64) -> Result<Steps>
         seeds,
         seed,
         STEP_ONSET_S,
+        None,
     )
 }
 
@@ -303,7 +316,8 @@ pub fn steps(kind: ArrayKind, size: f64, seeds: u64, seed: u64) -> Result<Steps>
 /// (the flight lasts until 40 s after it). A later onset judges the steps
 /// against the covariances learnt in flight rather than those of the
 /// first minute after training, which lack the sensors' slow wander
-/// (docs/parity-real-flights.md).
+/// (docs/parity-real-flights.md). `false_alarm` as in
+/// [`fault_free_flights_on`].
 pub fn steps_on(
     profile: &RealisticProfile,
     kind: ArrayKind,
@@ -311,6 +325,7 @@ pub fn steps_on(
     seeds: u64,
     seed: u64,
     onset: f64,
+    false_alarm: Option<f64>,
 ) -> Result<Steps> {
     let profile = profile.with_duration(onset + 40.0);
     let channel0 = match kind {
@@ -335,7 +350,7 @@ pub fn steps_on(
         .par_iter()
         .map(|&(sd, imu, axis, sign)| {
             let fault = ChannelFault::bias(imu, channel0 + axis, onset, onset + 15.0, sign * size);
-            let (alarms, iso, _, _, _, _) = run(kind, &profile, sd, Some(fault))?;
+            let (alarms, iso, _, _, _, _) = run(kind, &profile, sd, Some(fault), false_alarm)?;
             let sensor = 3 * imu + axis;
             let hit = iso
                 .iter()
@@ -343,17 +358,25 @@ pub fn steps_on(
                 .map(|(_, t)| t - onset);
             let wrong = iso.iter().any(|(k, _)| *k != sensor);
             let outside = alarms.iter().any(|t| *t < onset || *t > onset + 15.0);
-            Ok((hit, wrong || outside))
+            let alarmed = alarms
+                .iter()
+                .any(|t| *t >= onset && *t < onset + ISOLATE_WITHIN_S);
+            Ok((hit, alarmed, wrong || outside))
         })
         .collect::<Result<_>>()?;
     let mut out = Steps {
         cases: results.len(),
         ..Steps::default()
     };
-    for (hit, fa) in results {
+    for (hit, alarmed, fa) in results {
         if fa {
             out.false_alarms += 1;
-        } else if let Some(d) = hit {
+            continue;
+        }
+        if alarmed || hit.is_some() {
+            out.detected += 1;
+        }
+        if let Some(d) = hit {
             out.isolated += 1;
             out.delays.push(d);
         }

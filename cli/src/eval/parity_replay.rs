@@ -211,12 +211,17 @@ pub fn replay_parity(
 }
 
 /// Which parity tests a replay runs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum ParityMethod {
     /// [`ParityConfig::gyro_flight`]/[`ParityConfig::accel_flight`]: in-flight
     /// relative calibration and multi-scale tests with learned covariances.
     #[default]
     Flight,
+    /// [`Flight`](Self::Flight) with the multi-scale tests' per-decision
+    /// false-alarm probability replaced (flight default 1e-6): the one
+    /// knob that trades sensitivity for false alarms
+    /// (`scripts/parity-min-detectable.py`).
+    FlightAt(f64),
     /// The simulator's defaults ([`ParityConfig::gyro`]): windowed χ² or
     /// CUSUM on 0.1 s blocks with calibrated thresholds (white-noise model).
     GltCusum,
@@ -286,12 +291,12 @@ pub fn replay_parity_observed(
         ArrayKind::Accel => (0, 16.0 * imu_fdi::model::G0),
     };
     let cfg = match (kind, method) {
-        (ArrayKind::Gyro, ParityMethod::Flight) => {
+        (ArrayKind::Gyro, ParityMethod::Flight | ParityMethod::FlightAt(_)) => {
             let mut c = ParityConfig::<f32>::gyro_flight(rate, fs as f32);
             c.train_samples = (train_s * rate).round() as u32;
             c
         }
-        (ArrayKind::Accel, ParityMethod::Flight) => {
+        (ArrayKind::Accel, ParityMethod::Flight | ParityMethod::FlightAt(_)) => {
             let mut c = ParityConfig::<f32>::accel_flight(rate, fs as f32);
             c.train_samples = (train_s * rate).round() as u32;
             c
@@ -310,6 +315,10 @@ pub fn replay_parity_observed(
             c
         }
     };
+    let mut cfg = cfg;
+    if let ParityMethod::FlightAt(p) = method {
+        cfg.multiscale.false_alarm = p;
+    }
     let power_up_judged = cfg.judges_power_up_offsets();
     let geometry = Geometry::<f32, 9>::triads(&[Matrix3::identity(); 3])
         .map_err(|e| anyhow::anyhow!("{e:?}"))?;
@@ -318,7 +327,7 @@ pub fn replay_parity_observed(
     // Gyro biases judged at rest (absolute means while the board is still):
     // the gyro monitor of a real flight, whose offset limit it shares.
     let mut rest = match (kind, method) {
-        (ArrayKind::Gyro, ParityMethod::Flight) => Some(
+        (ArrayKind::Gyro, ParityMethod::Flight | ParityMethod::FlightAt(_)) => Some(
             RestCheck::<f32, 9>::new(
                 &geometry,
                 &geometry,

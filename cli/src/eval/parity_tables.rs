@@ -6,7 +6,7 @@ use anyhow::Result;
 
 use hal_sim::array::ArrayKind;
 
-use super::parity_replay::{replay_parity, replay_parity_with, ImuLog, Injection, ParityMethod};
+use super::parity_replay::{replay_parity_with, ImuLog, Injection, ParityMethod};
 
 /// One case of the step table: a bias on one IMU channel for a while.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -32,7 +32,8 @@ pub const STEP_ISOLATE_WITHIN_S: f64 = 10.0;
 /// `duration_s` is replayed; a case passes when the right sensor is
 /// isolated within [`STEP_ISOLATE_WITHIN_S`] and nothing alarms outside
 /// `[onset, onset + duration_s]` before `end_s` (the crash). Onsets are
-/// seconds after the monitoring start of each training start.
+/// seconds after the monitoring start of each training start; `method`
+/// is [`ParityMethod::Flight`] or [`ParityMethod::FlightAt`].
 #[allow(clippy::too_many_arguments)]
 pub fn step_table(
     log: &ImuLog,
@@ -43,6 +44,7 @@ pub fn step_table(
     onsets_after_start: &[f64],
     duration_s: f64,
     end_s: f64,
+    method: ParityMethod,
 ) -> Result<Vec<StepCase>> {
     let channel0 = match kind {
         ArrayKind::Gyro => 3,
@@ -71,7 +73,7 @@ pub fn step_table(
                 start,
                 end: start + duration_s,
             };
-            let r = replay_parity(log, kind, ts, train_s, Some(injection))?;
+            let r = replay_parity_with(log, kind, ts, train_s, Some(injection), method)?;
             let sensor = 3 * imu + axis;
             let from = r.monitoring_from.unwrap_or(f64::INFINITY);
             let first = r
@@ -112,7 +114,7 @@ pub struct PowerUpCase {
 /// For every training start, IMU, axis and sign: a bias of `size` on that
 /// channel for the whole log. The case passes when the sensor is isolated
 /// within [`STEP_ISOLATE_WITHIN_S`] of monitoring start and no healthy
-/// sensor is isolated before `end_s`.
+/// sensor is isolated before `end_s`; `method` as in [`step_table`].
 pub fn power_up_table(
     log: &ImuLog,
     kind: ArrayKind,
@@ -120,6 +122,7 @@ pub fn power_up_table(
     train_starts: &[f64],
     train_s: f64,
     end_s: f64,
+    method: ParityMethod,
 ) -> Result<Vec<PowerUpCase>> {
     let channel0 = match kind {
         ArrayKind::Gyro => 3,
@@ -145,7 +148,7 @@ pub fn power_up_table(
                 start: f64::NEG_INFINITY,
                 end: f64::INFINITY,
             };
-            let r = replay_parity(log, kind, ts, train_s, Some(injection))?;
+            let r = replay_parity_with(log, kind, ts, train_s, Some(injection), method)?;
             let sensor = 3 * imu + axis;
             let from = r.monitoring_from.unwrap_or(f64::INFINITY);
             let delay = r
