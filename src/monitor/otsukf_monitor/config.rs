@@ -110,6 +110,18 @@ impl<T: Real> OtsukfConfig<T> {
         }
     }
 
+    /// The attitude aiding's configured latency (`base.aiding_delay_s`) in
+    /// whole IMU periods: the lag compensated until an estimate exists.
+    #[cfg(feature = "aiding-estimators")]
+    pub(super) fn attitude_lag_steps(&self) -> usize {
+        let n = (self.base.aiding_delay_s / self.base.imu_period).to_f64();
+        if n.is_finite() && n > 0.0 {
+            (n + 0.5) as usize
+        } else {
+            0
+        }
+    }
+
     /// Checks every field, the base configuration's included; the error
     /// names the first offending field.
     pub fn validate(&self) -> Result<(), ConfigError> {
@@ -146,6 +158,11 @@ impl<T: Real> OtsukfConfig<T> {
         ];
         if let Some(&(field, _)) = in_range.iter().find(|(_, ok)| !ok) {
             return Err(ConfigError::OutOfRange(field));
+        }
+        // The attitude latency (`attitude_lag.rs`) is compiled with the
+        // aiding estimators; without them it would be silently ignored.
+        if !cfg!(feature = "aiding-estimators") && self.base.aiding_delay_s != T::zero() {
+            return Err(ConfigError::NotCompiled("aiding_delay_s"));
         }
         Ok(())
     }
