@@ -28,7 +28,10 @@
 //! `δ·(ω(t) − ω(t − block))`, and a constant gyro bias as a constant that
 //! the spread ignores. The estimate is the lag whose block mismatches
 //! spread least (normalised by the attitude σ) over the last
-//! [`TAU_BLOCKS`] blocks: no threshold, no margin.
+//! [`TAU_BLOCKS`] blocks, once the configured lag's spread exceeds the
+//! least by the latter's own sampling error (measured on log171 on time
+//! from 60 s, before the vehicle turns much: without that rule the
+//! estimate wandered, learning restarted and monitoring began 20 s late).
 //!
 //! **Limits.** Lags from 0 to [`MAX_LAG`] IMU periods (0.32 s at 100 Hz,
 //! the gyro/attitude block test's delay line), with aiding intervals up to
@@ -83,6 +86,9 @@ pub(super) struct AttitudeLag<T> {
     pub(super) steps: usize,
     /// The lag learning started at.
     learned: usize,
+    /// The configured lag, and whether the estimate has left it.
+    configured: usize,
+    left: bool,
     /// Per lag, the running mean and mean square of the normalised block
     /// mismatch of each angle, and this block's sum.
     mean: [Vector3<T>; LAGS],
@@ -103,6 +109,8 @@ impl<T: Real> AttitudeLag<T> {
             filled: 0,
             steps,
             learned: steps,
+            configured: steps,
+            left: false,
             mean: [Vector3::zeros(); LAGS],
             square: [Vector3::zeros(); LAGS],
             block: [Vector3::zeros(); LAGS],
@@ -180,6 +188,7 @@ impl<T: Real> AttitudeLag<T> {
         self.blocks += T::one();
         let k = T::one() / self.blocks.min(T::lit(TAU_BLOCKS));
         let mut best: Option<(usize, T)> = None;
+        let mut configured = None;
         for (lag, ((acc, m), q)) in self
             .block
             .iter()
@@ -191,16 +200,30 @@ impl<T: Real> AttitudeLag<T> {
             *m += (r - *m) * k;
             *q += (r.component_mul(&r) - *q) * k;
             let spread = (*q - m.component_mul(m)).map(|v| v.max(T::zero())).sum();
+            if lag == self.configured {
+                configured = Some(spread);
+            }
             if spread.finite() && best.is_none_or(|(_, b)| spread < b) {
                 best = Some((lag, spread));
             }
         }
         self.block = [Vector3::zeros(); LAGS];
         self.block_epochs = 0;
-        if self.blocks >= T::lit(MIN_BLOCKS) {
-            if let Some((lag, _)) = best {
-                self.steps = lag;
-            }
+        if self.blocks < T::lit(MIN_BLOCKS) {
+            return;
+        }
+        let Some((lag, b)) = best else { return };
+        // The configured lag is left only once its spread exceeds the
+        // best's by that spread's own sampling error (a mean of `n`
+        // squared, roughly normal mismatches: relative error `√(2/n)`): a
+        // vehicle that hardly rotates gives every lag the same spread, and
+        // an arbitrary pick would restart learning. After that, the least
+        // spread (no margin between lags, whose spreads share their data).
+        let n = self.blocks.min(T::lit(TAU_BLOCKS));
+        let evident = configured.is_some_and(|c| c - b > b * (T::lit(2.0) / n).sqrt_fast());
+        if self.left || evident {
+            self.left = true;
+            self.steps = lag;
         }
     }
 }
