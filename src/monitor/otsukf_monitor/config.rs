@@ -9,7 +9,11 @@ use crate::monitor::{ConfigError, UkfMonitorConfig};
 pub struct OtsukfConfig<T> {
     /// Vehicle, sensors, aiding, start-up timing and minimum faults, the
     /// bound of the learned `R` inflation (`max_innovation_inflation`) and
-    /// the two block tests (`attitude_rate`, `velocity_increment`); the
+    /// the two block tests (`attitude_rate`, `velocity_increment`), and the
+    /// attitude aiding's latency: `aiding_delay_s` (fixed) or
+    /// `estimate_aiding_delay` (online, up to 32 IMU periods; with the
+    /// `aiding-estimators` feature, `attitude_lag.rs`), which here apply to
+    /// the attitude only (the velocity's is `velocity_lag_s`); the
     /// innovation monitor's other detector fields are not used.
     pub base: UkfMonitorConfig<T>,
     /// Random-walk power spectral density of the fault model per channel,
