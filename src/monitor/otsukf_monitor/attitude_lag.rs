@@ -252,13 +252,19 @@ impl<T: Real> OtsukfMonitor<T> {
         self.att_lag.steps
     }
 
+    /// The state before the prediction, when the latency is on (a 6×6
+    /// product: not computed otherwise).
+    pub(super) fn att_lag_before(&self) -> Option<StateVec<T>> {
+        self.att_lag_on().then(|| self.filter.state())
+    }
+
     /// After a period: its attitude change as the raw gyro gave it, the
     /// propagated change (`before` the state before the prediction) plus
     /// the gyro fault estimate's share `B·f̂·dt`.
-    pub(super) fn att_lag_period(&mut self, before: &StateVec<T>, propagated: bool, dt: T) {
-        if !self.att_lag_on() {
+    pub(super) fn att_lag_period(&mut self, before: &Option<StateVec<T>>, propagated: bool, dt: T) {
+        let Some(before) = before else {
             return;
-        }
+        };
         let after = self.filter.state();
         let d = match (propagated, self.model.jacobian_input(before)) {
             (true, Ok(b)) => {

@@ -18,7 +18,17 @@ impl<T: Real> OtsukfMonitor<T> {
 
     pub(super) fn att_lag_reset(&mut self) {}
 
-    pub(super) fn att_lag_period(&mut self, _before: &StateVec<T>, _propagated: bool, _dt: T) {}
+    pub(super) fn att_lag_before(&self) -> Option<StateVec<T>> {
+        None
+    }
+
+    pub(super) fn att_lag_period(
+        &mut self,
+        _before: &Option<StateVec<T>>,
+        _propagated: bool,
+        _dt: T,
+    ) {
+    }
 
     pub(super) fn att_lag_epoch(&mut self, _aiding: &Measurement<T>) {}
 

@@ -223,7 +223,7 @@ impl<T: Real> OtsukfMonitor<T> {
             return self.compose(&u_meas, health, false);
         }
         let v_before = self.predicted_velocity(&omega);
-        let x_before = self.filter.state();
+        let x_before = self.att_lag_before();
         let mut propagated = false;
         if dt_ok {
             self.blocks_sample(imu, dt, usable);
