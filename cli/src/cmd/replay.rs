@@ -87,7 +87,9 @@ pub(crate) struct Args {
     /// UKF monitor: latency of the aiding, seconds (fused against the
     /// state of its own time, PX4 EKF2-style delayed fusion), or `auto` to
     /// estimate it online from the attitude aiding (up to 32 IMU periods
-    /// minus the attitude interval).
+    /// minus the attitude interval). OTSUKF: the attitude aiding's latency
+    /// (brought to now by the gyro's change over it), or `auto` (estimated
+    /// online, up to 32 IMU periods); the GNSS velocity's is `--velocity-lag`.
     #[arg(long, value_parser = parse_delay, default_value = "0")]
     aiding_delay: imu_fdi_cli::eval::replay::AidingDelay,
     /// UKF monitor: `auto` learns a constant heading offset between the

@@ -7,6 +7,7 @@
 
 pub mod array_run;
 pub mod array_sweep;
+pub mod attitude_lag;
 pub mod campaign;
 mod dataflash_imus;
 pub mod gnss_lag;

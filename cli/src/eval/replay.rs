@@ -4,7 +4,7 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 use imu_fdi::model::{AidingKind, ImuVec, MeasVec, Measurement, CHANNEL_NAMES};
-use imu_fdi::monitor::{Phase, UkfMonitorConfig};
+use imu_fdi::monitor::{Phase, UkfMonitorConfig, MAX_DELAY_STEPS};
 
 use super::replay_monitor::{phase_name, MonitorKind, ReplayMonitor};
 use super::replay_read::{read_log, Log, Row};
@@ -119,14 +119,31 @@ pub fn replay_observed(
             let ok = r.avail.iter().skip(o).take(3).all(|a| *a);
             ok.then(|| core::array::from_fn(|i| r.z.get(o + i).copied().unwrap_or(0.0)))
         };
+        let times: Vec<f64> = head.iter().map(|r| r.t).collect();
+        let imu: Vec<[f64; 6]> = head
+            .iter()
+            .map(|r| r.imus.get(k).copied().unwrap_or([f64::NAN; 6]))
+            .collect();
+        let mut att: Vec<Option<[f64; 3]>> = head.iter().map(|r| avail3(r, 3)).collect();
+        // The OTSUKF's attitude latency (`--aiding-delay`): the attitude
+        // rows moved back by it, so the velocity fit rotates the specific
+        // force by the attitude of its own time (`attitude_lag.rs`).
+        let att_rows = match (opts.monitor, opts.aiding_delay) {
+            (MonitorKind::Otsukf, AidingDelay::Fixed(d)) => (d / dt).round().max(0.0) as usize,
+            (MonitorKind::Otsukf, AidingDelay::Auto) => {
+                super::attitude_lag::estimate(&times, &imu, &att, MAX_DELAY_STEPS).unwrap_or(0)
+            }
+            (MonitorKind::Ukf, _) => 0,
+        };
+        if att_rows > 0 {
+            att = att.iter().skip(att_rows).copied().collect();
+            att.resize(head.len(), None);
+        }
         Ok(super::gnss_lag::estimate(
-            &head.iter().map(|r| r.t).collect::<Vec<_>>(),
-            &head
-                .iter()
-                .map(|r| r.imus.get(k).copied().unwrap_or([f64::NAN; 6]))
-                .collect::<Vec<_>>(),
+            &times,
+            &imu,
             &head.iter().map(|r| avail3(r, 0)).collect::<Vec<_>>(),
-            &head.iter().map(|r| avail3(r, 3)).collect::<Vec<_>>(),
+            &att,
             (0.5 / dt).round() as usize,
         ))
     };
@@ -191,12 +208,12 @@ pub fn replay_observed(
             AidingDelay::Auto => cfg.estimate_aiding_delay = true,
         }
         cfg.estimate_heading_offset = opts.estimate_heading_offset;
-        if opts.monitor == MonitorKind::Otsukf
-            && (opts.aiding_delay != AidingDelay::Fixed(0.0) || opts.estimate_heading_offset)
-        {
+        // The OTSUKF takes `--aiding-delay` as its attitude aiding's latency
+        // (its GNSS velocity's is `--velocity-lag`); it has no heading
+        // offset estimate.
+        if opts.monitor == MonitorKind::Otsukf && opts.estimate_heading_offset {
             bail!(
-                "{}: the aiding delay and heading offset are the UKF monitor's \
-                 (--monitor ukf); the OTSUKF fuses aiding on arrival",
+                "{}: the heading offset is the UKF monitor's (--monitor ukf)",
                 input.display()
             );
         }
@@ -440,7 +457,7 @@ pub fn replay_observed(
         }
     }
     sum.imus = imus;
-    if opts.monitor == MonitorKind::Ukf {
+    if opts.monitor == MonitorKind::Ukf || opts.aiding_delay != AidingDelay::Fixed(0.0) {
         sum.aiding_delay_mode = Some(match opts.aiding_delay {
             AidingDelay::Fixed(_) => "fixed".into(),
             AidingDelay::Auto => "auto".into(),

@@ -30,8 +30,9 @@ pub struct ReplayDetail {
     /// update, NaN where the channel was absent (UKF monitor).
     pub innovations: Option<[(f64, f64); 6]>,
     /// The aiding latency the monitor fuses at, s: the configured one or
-    /// the online estimate (UKF monitor;
-    /// [`UkfMonitor::aiding_delay_estimate`]).
+    /// the online estimate ([`UkfMonitor::aiding_delay_estimate`]; the
+    /// OTSUKF's attitude latency, [`OtsukfMonitor::attitude_lag_estimate`],
+    /// when configured or estimated).
     pub aiding_delay_s: Option<f64>,
     /// The heading offset of the attitude aiding learnt so far, rad (UKF
     /// monitor; 0 unless estimated;
@@ -113,6 +114,9 @@ impl ReplayMonitor {
             }
             Self::Otsukf(m) => {
                 let r = m.step(imu, dt, aiding);
+                // The attitude latency only when configured or estimated:
+                // the replay's output is otherwise as before.
+                let att_lag = m.attitude_lag_estimate();
                 let vi = m.velocity_increment_detail();
                 let ar = m.attitude_rate_detail();
                 let block_ratio = core::array::from_fn(|i| {
@@ -127,7 +131,7 @@ impl ReplayMonitor {
                     fault_sigma: Some(d.fault_sigma),
                     innovation_inflation: Some(d.innovation_inflation),
                     innovations: None,
-                    aiding_delay_s: None,
+                    aiding_delay_s: att_lag,
                     heading_offset_rad: None,
                     velocity_increment: vi.map(|(d, lag)| (lag, d.offset)),
                     block_ratio,

@@ -108,13 +108,15 @@ pub struct ReplaySummary {
     /// OTSUKF).
     #[serde(rename = "innovation_inflation_factor")]
     pub innovation_inflation: Vec<[f64; 6]>,
-    /// How the UKF monitor's aiding latency was set: `fixed`
-    /// (`--aiding-delay SECONDS`, default 0) or `auto` (estimated online);
-    /// `None` for the OTSUKF, which fuses aiding on arrival.
+    /// How the UKF monitor's aiding latency (the OTSUKF's attitude
+    /// latency) was set: `fixed` (`--aiding-delay SECONDS`, default 0) or
+    /// `auto` (estimated online); `None` for the OTSUKF without the option
+    /// (attitude fused on arrival).
     pub aiding_delay_mode: Option<String>,
     /// Per IMU, the aiding latency the UKF monitor fused at on the last
     /// row, s: the configured value, or with `--aiding-delay auto` the
-    /// online estimate (empty for the OTSUKF).
+    /// online estimate (the OTSUKF's attitude latency; empty for the
+    /// OTSUKF without the option).
     pub aiding_delay_s: Vec<f64>,
     /// Whether the heading offset of the attitude aiding was estimated
     /// (`--heading-offset auto`).

@@ -83,7 +83,11 @@ impl<T: Real> OtsukfMonitor<T> {
         let live = usable && self.blocks_live();
         #[cfg(feature = "attitude-rate-test")]
         if self.cfg.base.attitude_rate.is_some() {
-            self.att_rate.sample(imu, dt, live);
+            // At the attitude aiding's latency (`attitude_lag.rs`): the
+            // interval between two epochs then spans the same motion in
+            // the gyro and the aiding.
+            let delay = self.att_lag_steps();
+            self.att_rate.sample_delayed(imu, dt, live, delay);
         }
         #[cfg(feature = "velocity-increment-test")]
         if self.cfg.base.velocity_increment.is_some() {

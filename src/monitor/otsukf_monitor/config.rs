@@ -9,7 +9,11 @@ use crate::monitor::{ConfigError, UkfMonitorConfig};
 pub struct OtsukfConfig<T> {
     /// Vehicle, sensors, aiding, start-up timing and minimum faults, the
     /// bound of the learned `R` inflation (`max_innovation_inflation`) and
-    /// the two block tests (`attitude_rate`, `velocity_increment`); the
+    /// the two block tests (`attitude_rate`, `velocity_increment`), and the
+    /// attitude aiding's latency: `aiding_delay_s` (fixed) or
+    /// `estimate_aiding_delay` (online, up to 32 IMU periods; with the
+    /// `aiding-estimators` feature, `attitude_lag.rs`), which here apply to
+    /// the attitude only (the velocity's is `velocity_lag_s`); the
     /// innovation monitor's other detector fields are not used.
     pub base: UkfMonitorConfig<T>,
     /// Random-walk power spectral density of the fault model per channel,
@@ -110,6 +114,18 @@ impl<T: Real> OtsukfConfig<T> {
         }
     }
 
+    /// The attitude aiding's configured latency (`base.aiding_delay_s`) in
+    /// whole IMU periods: the lag compensated until an estimate exists.
+    #[cfg(feature = "aiding-estimators")]
+    pub(super) fn attitude_lag_steps(&self) -> usize {
+        let n = (self.base.aiding_delay_s / self.base.imu_period).to_f64();
+        if n.is_finite() && n > 0.0 {
+            (n + 0.5) as usize
+        } else {
+            0
+        }
+    }
+
     /// Checks every field, the base configuration's included; the error
     /// names the first offending field.
     pub fn validate(&self) -> Result<(), ConfigError> {
@@ -146,6 +162,11 @@ impl<T: Real> OtsukfConfig<T> {
         ];
         if let Some(&(field, _)) = in_range.iter().find(|(_, ok)| !ok) {
             return Err(ConfigError::OutOfRange(field));
+        }
+        // The attitude latency (`attitude_lag.rs`) is compiled with the
+        // aiding estimators; without them it would be silently ignored.
+        if !cfg!(feature = "aiding-estimators") && self.base.aiding_delay_s != T::zero() {
+            return Err(ConfigError::NotCompiled("aiding_delay_s"));
         }
         Ok(())
     }

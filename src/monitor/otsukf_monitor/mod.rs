@@ -19,6 +19,10 @@ use crate::model::{
     StateVec, VehicleModel, NZ, STATE_ANGLES,
 };
 
+#[cfg(feature = "aiding-estimators")]
+mod attitude_lag;
+#[cfg(not(feature = "aiding-estimators"))]
+mod attitude_lag_off;
 #[cfg(any(feature = "attitude-rate-test", feature = "velocity-increment-test"))]
 mod block_tests;
 #[cfg(not(any(feature = "attitude-rate-test", feature = "velocity-increment-test")))]
@@ -87,6 +91,9 @@ pub struct OtsukfMonitor<T> {
     vel_lag: VelocityLag<T>,
     /// The velocity aiding's latency in IMU periods (0: fused on arrival).
     lag_steps: usize,
+    /// The attitude aiding's latency: its ring, estimate and lag in use.
+    #[cfg(feature = "aiding-estimators")]
+    att_lag: attitude_lag::AttitudeLag<T>,
     /// The gyro/attitude-aiding block test (`base.attitude_rate`).
     #[cfg(feature = "attitude-rate-test")]
     att_rate: crate::monitor::block_test::attitude_rate::AttitudeRate<T>,
@@ -142,6 +149,8 @@ impl<T: Real> OtsukfMonitor<T> {
             inflation: Inflation::new(),
             vel_lag: VelocityLag::new(),
             lag_steps: cfg.lag_steps(),
+            #[cfg(feature = "aiding-estimators")]
+            att_lag: attitude_lag::AttitudeLag::new(cfg.attitude_lag_steps()),
             #[cfg(feature = "attitude-rate-test")]
             att_rate: crate::monitor::block_test::attitude_rate::AttitudeRate::for_config(b),
             #[cfg(feature = "velocity-increment-test")]
@@ -214,6 +223,7 @@ impl<T: Real> OtsukfMonitor<T> {
             return self.compose(&u_meas, health, false);
         }
         let v_before = self.predicted_velocity(&omega);
+        let x_before = self.att_lag_before();
         let mut propagated = false;
         if dt_ok {
             self.blocks_sample(imu, dt, usable);
@@ -234,16 +244,18 @@ impl<T: Real> OtsukfMonitor<T> {
             };
             self.vel_lag.push(dv);
         }
+        self.att_lag_period(&x_before, propagated, dt);
         // Through ±90°: the attitude is re-aligned from the aiding.
         if health.pitch_singular && aiding.any() && self.recover_singular(aiding, &omega) {
             health.mark_realigned(false);
         }
         let mut updated = false;
         if aiding.any() && !health.pitch_singular {
-            // The velocity brought to now before anything compares it with
-            // the state: re-aligned to its late value in every turn, the
-            // state would be pulled back by the lag it compensates.
-            let mut present = self.bring_velocity_forward(aiding);
+            // The velocity and attitude brought to now before anything
+            // compares them with the state: re-aligned to a late value in
+            // every turn, the state would be pulled back by the lag.
+            self.att_lag_epoch(aiding);
+            let mut present = self.bring_attitude_forward(&self.bring_velocity_forward(aiding));
             let after_gap = if cfg!(feature = "imu-gap-recovery") {
                 self.realign_after_gap(&present, &omega)
             } else {
@@ -375,55 +387,7 @@ impl<T: Real> OtsukfMonitor<T> {
         self.phase = Phase::Converging;
         self.phase_time = T::zero();
         self.vel_lag.reset();
-    }
-
-    /// The velocity rows of `h(x̂)` (NED for GNSS, body for a DVL), when
-    /// the velocity aiding's latency is compensated.
-    fn predicted_velocity(&self, omega: &Vector3<T>) -> Option<Vector3<T>> {
-        if self.lag_steps == 0 {
-            return None;
-        }
-        let z = self.meas.predict(&self.filter.state(), omega);
-        Some(z.fixed_rows::<3>(0).into_owned())
-    }
-
-    /// The accelerometer fault estimate as a rate of the measured velocity
-    /// (rotated to NED for GNSS): added back to each period's propagated
-    /// change, so the change is that of the raw specific force. Taken with
-    /// the corrected one, the compensation would move with `f̂` itself, a
-    /// feedback the fault filter does not model: on S3 with the GNSS 0.2 s
-    /// late, compensating 0.3 s made the fault estimates diverge.
-    fn fault_velocity_rate(&self) -> Vector3<T> {
-        let mut x = self.filter.state();
-        let f = self.filter.fault();
-        for (v, fa) in x.iter_mut().zip(f.iter()).take(3) {
-            *v = *fa;
-        }
-        let z = self.meas.predict(&x, &Vector3::zeros());
-        z.fixed_rows::<3>(0).into_owned()
-    }
-
-    /// A velocity that describes the vehicle `lag_steps` periods ago,
-    /// brought to now by the IMU-propagated change since
-    /// (`velocity_lag.rs`); not fused until that change is known.
-    fn bring_velocity_forward(&self, aiding: &Measurement<T>) -> Measurement<T> {
-        let mut a = *aiding;
-        if self.lag_steps == 0 || !a.available.iter().take(3).any(|v| *v) {
-            return a;
-        }
-        match self.vel_lag.over(self.lag_steps) {
-            Some(dv) => {
-                for (z, d) in a.z.iter_mut().zip(dv.iter()) {
-                    *z += *d;
-                }
-            }
-            None => {
-                for v in a.available.iter_mut().take(3) {
-                    *v = false;
-                }
-            }
-        }
-        a
+        self.att_lag_reset();
     }
 
     #[inline(never)] // own stack frame and one copy (issue 17)

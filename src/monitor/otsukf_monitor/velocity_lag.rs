@@ -17,7 +17,9 @@
 
 use nalgebra::Vector3;
 
+use super::OtsukfMonitor;
 use crate::math::Real;
+use crate::model::Measurement;
 
 /// IMU periods kept: the longest lag (0.64 s at 100 Hz, 1.28 s at 50 Hz).
 pub(super) const LAG_RING: usize = 64;
@@ -72,6 +74,59 @@ impl<T: Real> VelocityLag<T> {
     /// Forgets the history (alignment: the velocity jumps).
     pub(super) fn reset(&mut self) {
         self.filled = 0;
+    }
+}
+
+/// The monitor's side: the per-period changes and the late velocity
+/// brought to now.
+impl<T: Real> OtsukfMonitor<T> {
+    /// The velocity rows of `h(x̂)` (NED for GNSS, body for a DVL), when
+    /// the velocity aiding's latency is compensated.
+    pub(super) fn predicted_velocity(&self, omega: &Vector3<T>) -> Option<Vector3<T>> {
+        if self.lag_steps == 0 {
+            return None;
+        }
+        let z = self.meas.predict(&self.filter.state(), omega);
+        Some(z.fixed_rows::<3>(0).into_owned())
+    }
+
+    /// The accelerometer fault estimate as a rate of the measured velocity
+    /// (rotated to NED for GNSS): added back to each period's propagated
+    /// change, so the change is that of the raw specific force. Taken with
+    /// the corrected one, the compensation would move with `f̂` itself, a
+    /// feedback the fault filter does not model: on S3 with the GNSS 0.2 s
+    /// late, compensating 0.3 s made the fault estimates diverge.
+    pub(super) fn fault_velocity_rate(&self) -> Vector3<T> {
+        let mut x = self.filter.state();
+        let f = self.filter.fault();
+        for (v, fa) in x.iter_mut().zip(f.iter()).take(3) {
+            *v = *fa;
+        }
+        let z = self.meas.predict(&x, &Vector3::zeros());
+        z.fixed_rows::<3>(0).into_owned()
+    }
+
+    /// A velocity that describes the vehicle `lag_steps` periods ago,
+    /// brought to now by the IMU-propagated change since
+    /// (`velocity_lag.rs`); not fused until that change is known.
+    pub(super) fn bring_velocity_forward(&self, aiding: &Measurement<T>) -> Measurement<T> {
+        let mut a = *aiding;
+        if self.lag_steps == 0 || !a.available.iter().take(3).any(|v| *v) {
+            return a;
+        }
+        match self.vel_lag.over(self.lag_steps) {
+            Some(dv) => {
+                for (z, d) in a.z.iter_mut().zip(dv.iter()) {
+                    *z += *d;
+                }
+            }
+            None => {
+                for v in a.available.iter_mut().take(3) {
+                    *v = false;
+                }
+            }
+        }
+        a
     }
 }
 
