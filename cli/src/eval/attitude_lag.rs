@@ -100,16 +100,7 @@ pub fn estimate(
                 ))
             })
             .collect();
-        let (srt, stt) = res.iter().fold(([0.0; 3], 0.0), |(s, q), (r, dt)| {
-            (
-                [s[0] + r[0] * dt, s[1] + r[1] * dt, s[2] + r[2] * dt],
-                q + dt * dt,
-            )
-        });
-        let b: [f64; 3] = core::array::from_fn(|k| if stt > 0.0 { srt[k] / stt } else { 0.0 });
-        res.iter()
-            .map(|(r, dt)| (0..3).map(|k| (r[k] - b[k] * dt).powi(2)).sum::<f64>())
-            .sum::<f64>()
+        super::gnss_lag::sse_after_bias(&res)
     };
     let zero = cost(0);
     Some(

@@ -40,6 +40,22 @@ pub struct GnssLag {
 
 /// Body (FRD) → NED rotation of a ZYX (yaw, pitch, roll) attitude, applied
 /// to `f`.
+/// Sum of squares of the residuals `r` over intervals `Δt` left after the
+/// least-squares constant rate per axis (`r ≈ b·Δt`): a sensor bias, which
+/// no lag explains. Shared with the attitude lag fit (`attitude_lag.rs`).
+pub(super) fn sse_after_bias(res: &[([f64; 3], f64)]) -> f64 {
+    let (srt, stt) = res.iter().fold(([0.0; 3], 0.0), |(s, q), (r, dt)| {
+        (
+            [s[0] + r[0] * dt, s[1] + r[1] * dt, s[2] + r[2] * dt],
+            q + dt * dt,
+        )
+    });
+    let b: [f64; 3] = core::array::from_fn(|k| if stt > 0.0 { srt[k] / stt } else { 0.0 });
+    res.iter()
+        .map(|(r, dt)| (0..3).map(|k| (r[k] - b[k] * dt).powi(2)).sum::<f64>())
+        .sum()
+}
+
 fn to_ned(att: [f64; 3], f: [f64; 3]) -> [f64; 3] {
     let [r, p, y] = att;
     let (sr, cr, sp, cp, sy, cy) = (r.sin(), r.cos(), p.sin(), p.cos(), y.sin(), y.cos());
@@ -122,18 +138,7 @@ pub fn estimate(
                 ))
             })
             .collect();
-        let (srt, stt) = res.iter().fold(([0.0; 3], 0.0), |(s, q), (r, dt)| {
-            (
-                [s[0] + r[0] * dt, s[1] + r[1] * dt, s[2] + r[2] * dt],
-                q + dt * dt,
-            )
-        });
-        let b: [f64; 3] = core::array::from_fn(|k| if stt > 0.0 { srt[k] / stt } else { 0.0 });
-        let ss: f64 = res
-            .iter()
-            .map(|(r, dt)| (0..3).map(|k| (r[k] - b[k] * dt).powi(2)).sum::<f64>())
-            .sum();
-        (ss / res.len().max(1) as f64).sqrt()
+        (sse_after_bias(&res) / res.len().max(1) as f64).sqrt()
     };
     let rms_at_zero_m_s = cost(0);
     let (rows, rms_m_s) =
