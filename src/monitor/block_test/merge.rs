@@ -48,3 +48,193 @@ pub(in crate::monitor) fn merge_block_flags<T: Real>(
         *e = *m;
     }
 }
+
+/// Withholds the monitor's own flags on the three channels from `first`
+/// that the block test finds healthy while a fault it has seen stands on
+/// another channel of the same triad (issue 15, cascades after large
+/// glitches).
+///
+/// **Why.** A large gyro fault integrates tens of degrees of attitude
+/// error into the filter within a second; its attitude innovations then
+/// carry that error on every axis the vehicle's attitude couples, and the
+/// filter's own test flags healthy axes (log171, IMU0 g_z +50 °/s for 1 s
+/// at 120 s, 23° of roll: g_y flagged 120.9–124.1 s with an estimate of
+/// −4 °/s while the block test's ratio on g_y stayed at 0.16–0.23 and on
+/// g_z rose to 4.8). The block test compares the raw sensor with the
+/// aiding axis by axis (`attitude_rate`: the body rotation of each
+/// interval, exact at any rate), so a fault on one axis reaches another
+/// only at second order. While it sees a fault on channel `j` — a decision
+/// above its threshold or its flag now, or either during the monitor's
+/// flag on `j` still standing (the filter's error outlasts the windows
+/// that saw the fault) — and judges channel `c ≠ j` below threshold, the
+/// filter's flag on `c` is the coupling of `j`'s error, not evidence of
+/// its own: `c` reads `NotMonitored` (the filter cannot judge it now) and
+/// takes the block test's flag if that rises (the caller merges with
+/// `unjudged`). Nothing changes while the block test has seen no fault,
+/// or cannot judge `c` (ratio 0), so a fault the filter alone detects
+/// keeps its flag. Returns whether a flag was withheld.
+pub(in crate::monitor) fn withhold_coupled_flags<T: Real>(
+    status: &mut [ChannelState; 6],
+    estimate: &mut ImuVec<T>,
+    first: usize,
+    test: &mut BlockTest<T>,
+) -> bool {
+    let flagged =
+        |s: &ChannelState| matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative);
+    let d = &test.detail;
+    let sees_now = |c: usize| {
+        d.ratio.get(c).is_some_and(|r| *r >= T::one()) || d.flag.get(c).is_some_and(|f| *f != 0)
+    };
+    let healthy: [bool; 3] = core::array::from_fn(|c| {
+        d.ratio
+            .get(c)
+            .is_some_and(|r| *r > T::zero() && *r < T::one())
+            && d.flag.get(c).is_some_and(|f| *f == 0)
+    });
+    let now: [bool; 3] = core::array::from_fn(sees_now);
+    for (c, seen) in test.seen_in_flag.iter_mut().enumerate() {
+        let on = status.get(first + c).is_some_and(flagged);
+        *seen = on && (*seen || now.get(c).copied().unwrap_or(false));
+    }
+    let sees: [bool; 3] = core::array::from_fn(|c| {
+        now.get(c).copied().unwrap_or(false) || test.seen_in_flag.get(c).copied().unwrap_or(false)
+    });
+    let mut withheld = false;
+    for c in 0..3 {
+        let (Some(st), Some(e)) = (status.get_mut(first + c), estimate.get_mut(first + c)) else {
+            continue;
+        };
+        let other = (0..3).any(|j| j != c && sees.get(j).copied().unwrap_or(false));
+        if flagged(st) && healthy.get(c).copied().unwrap_or(false) && other {
+            *st = ChannelState::NotMonitored;
+            *e = T::zero();
+            withheld = true;
+        }
+    }
+    withheld
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ChannelState::{FaultNegative, FaultPositive, Healthy, NotMonitored};
+
+    /// A gyro test that saw `ratio` and raised `flag` at its last decision.
+    fn test_with(ratio: [f64; 3], flag: [i8; 3]) -> BlockTest<f64> {
+        let mut t = BlockTest::new(1e-4);
+        t.detail.ratio = ratio;
+        t.detail.flag = flag;
+        t
+    }
+
+    #[test]
+    fn a_flag_the_test_contradicts_while_it_sees_another_axis_is_withheld() {
+        let mut status = [
+            Healthy,
+            Healthy,
+            Healthy,
+            Healthy,
+            FaultNegative,
+            FaultPositive,
+        ];
+        let mut est = ImuVec::<f64>::from_column_slice(&[0.0, 0.0, 0.0, 0.0, -0.07, 0.2]);
+        // g_z above threshold (not yet confirmed), g_y well below it.
+        let mut t = test_with([0.05, 0.2, 4.8], [0, 0, 0]);
+        assert!(withhold_coupled_flags(&mut status, &mut est, 3, &mut t));
+        assert_eq!(
+            status,
+            [
+                Healthy,
+                Healthy,
+                Healthy,
+                Healthy,
+                NotMonitored,
+                FaultPositive
+            ]
+        );
+        assert_eq!(est[4], 0.0);
+        assert_eq!(est[5], 0.2);
+        // The accelerometer triad is another test's.
+        let mut acc = [
+            FaultPositive,
+            FaultPositive,
+            Healthy,
+            Healthy,
+            Healthy,
+            Healthy,
+        ];
+        assert!(!withhold_coupled_flags(
+            &mut acc,
+            &mut est,
+            0,
+            &mut test_with([0.1, 0.1, 0.1], [0; 3])
+        ));
+        assert_eq!(acc[0], FaultPositive);
+    }
+
+    #[test]
+    fn flags_stand_when_the_test_sees_nothing_cannot_judge_or_agrees() {
+        let flagged = [
+            Healthy,
+            Healthy,
+            Healthy,
+            Healthy,
+            FaultNegative,
+            FaultPositive,
+        ];
+        let cases = [
+            // Sees no fault anywhere: the filter alone detects.
+            ([0.1, 0.2, 0.9], [0, 0, 0]),
+            // Cannot judge g_y yet (ratio 0).
+            ([0.1, 0.0, 3.0], [0, 0, 0]),
+            // Sees g_y above threshold too.
+            ([0.1, 1.2, 3.0], [0, 0, 0]),
+            // Its own flag on g_y is held.
+            ([0.1, 0.5, 3.0], [0, -1, 0]),
+        ];
+        for (ratio, flag) in cases {
+            let mut status = flagged;
+            let mut est = ImuVec::<f64>::zeros();
+            let mut t = test_with(ratio, flag);
+            assert!(
+                !withhold_coupled_flags(&mut status, &mut est, 3, &mut t),
+                "{ratio:?}"
+            );
+            assert_eq!(status, flagged, "{ratio:?} {flag:?}");
+        }
+        // Its flag on another axis is enough evidence of a fault there.
+        let mut status = flagged;
+        let mut est = ImuVec::<f64>::zeros();
+        let mut t = test_with([0.9, 0.3, 0.5], [1, 0, 0]);
+        assert!(withhold_coupled_flags(&mut status, &mut est, 3, &mut t));
+        assert_eq!(status[4], NotMonitored);
+        assert_eq!(status[5], NotMonitored);
+    }
+
+    #[test]
+    fn a_fault_seen_during_a_flag_still_standing_keeps_withholding() {
+        let both = [
+            Healthy,
+            Healthy,
+            Healthy,
+            Healthy,
+            FaultNegative,
+            FaultPositive,
+        ];
+        let mut est = ImuVec::<f64>::zeros();
+        let mut t = test_with([0.1, 0.2, 4.8], [0, 0, 0]);
+        let mut status = both;
+        assert!(withhold_coupled_flags(&mut status, &mut est, 3, &mut t));
+        // The windows no longer hold the fault, the filter still flags g_z.
+        t.detail.ratio = [0.1, 0.2, 0.7];
+        let mut status = both;
+        assert!(withhold_coupled_flags(&mut status, &mut est, 3, &mut t));
+        assert_eq!(status[4], NotMonitored);
+        // g_z's flag ended: a later flag on g_y alone is the filter's own.
+        let mut status = [Healthy, Healthy, Healthy, Healthy, Healthy, Healthy];
+        assert!(!withhold_coupled_flags(&mut status, &mut est, 3, &mut t));
+        let mut status = both;
+        assert!(!withhold_coupled_flags(&mut status, &mut est, 3, &mut t));
+        assert_eq!(status, both);
+    }
+}

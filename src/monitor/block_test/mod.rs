@@ -85,7 +85,7 @@ mod motion_variance;
 mod motion_variance_tests;
 #[cfg(test)]
 pub(super) mod test_noise;
-pub(super) use merge::merge_block_flags;
+pub(super) use merge::{merge_block_flags, withhold_coupled_flags};
 #[cfg(feature = "attitude-rate-test")]
 pub(super) mod attitude_rate;
 pub(super) mod rotation;
@@ -245,6 +245,10 @@ pub(super) struct BlockTest<T> {
     ukf_mask: [u8; 3],
     /// Per channel: the flag was last confirmed outside that mask.
     confirmed_clean: [bool; 3],
+    /// Per channel: the test has seen a fault on it (a decision above
+    /// threshold, or its flag) during the monitor's flag on it now
+    /// standing (`withhold_coupled_flags`).
+    pub(super) seen_in_flag: [bool; 3],
     /// Per channel: the newest shortest window's deviation from the offset
     /// and its threshold deviation (`None`: it could not judge).
     shortest: [Option<(T, T)>; 3],
@@ -282,6 +286,7 @@ impl<T: Real> BlockTest<T> {
             ukf_seen: [false; 3],
             ukf_mask: [0; 3],
             confirmed_clean: [false; 3],
+            seen_in_flag: [false; 3],
             shortest: [None; 3],
             detail: BlockTestDetail::default(),
         }
@@ -304,6 +309,7 @@ impl<T: Real> BlockTest<T> {
         self.ukf_seen = [false; 3];
         self.ukf_mask = [0; 3];
         self.shortest = [None; 3];
+        self.seen_in_flag = [false; 3];
         self.detail.flag = [0; 3];
         self.detail.estimate = [T::zero(); 3];
         self.detail.ratio = [T::zero(); 3];

@@ -16,7 +16,9 @@
 use super::OtsukfMonitor;
 use crate::math::Real;
 use crate::model::{ImuVec, Measurement, NZ};
-use crate::monitor::block_test::{merge_block_flags, ChannelLimits, EpochContext, IntervalTest};
+use crate::monitor::block_test::{
+    merge_block_flags, withhold_coupled_flags, ChannelLimits, EpochContext, IntervalTest,
+};
 use crate::monitor::{AttitudeRateDetail, OtsukfReport, Phase, VelocityIncrementDetail};
 use nalgebra::Vector3;
 
@@ -147,7 +149,18 @@ impl<T: Real> OtsukfMonitor<T> {
                 // In a hold-off the channels read `NotMonitored`; a block
                 // test's flag still shows (as before the hold-off).
                 let held = self.holdoff > T::zero();
-                merge_block_flags(&mut r.status, &mut r.fault_estimate, first, t, held);
+                // The fault estimate's flag on a gyro the test finds
+                // healthy while it sees a fault on another gyro is that
+                // fault's coupling (`withhold_coupled_flags`).
+                let coupled = first == 3
+                    && withhold_coupled_flags(&mut r.status, &mut r.fault_estimate, first, t);
+                merge_block_flags(
+                    &mut r.status,
+                    &mut r.fault_estimate,
+                    first,
+                    t,
+                    held || coupled,
+                );
             }
         }
     }

@@ -4,7 +4,9 @@
 
 use crate::math::Real;
 use crate::model::{ImuVec, Measurement};
-use crate::monitor::block_test::{any_flag, merge_block_flags, EpochContext, IntervalTest};
+use crate::monitor::block_test::{
+    any_flag, merge_block_flags, withhold_coupled_flags, EpochContext, IntervalTest,
+};
 use crate::monitor::ukf_monitor::realign::flag_reference;
 use crate::monitor::ukf_monitor::UkfMonitor;
 use crate::monitor::{AttitudeRateDetail, Phase};
@@ -68,12 +70,20 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
 
     /// Adds the test's flags to the report: a gyro channel the UKF finds
     /// healthy is reported faulty while the test flags it, with the window
-    /// mean as its estimate.
+    /// mean as its estimate. A UKF flag on a gyro the test finds healthy
+    /// while it sees a fault on another gyro is withheld first (the
+    /// coupling of that fault's attitude error, `withhold_coupled_flags`).
     pub(in crate::monitor::ukf_monitor) fn att_rate_apply(&mut self) {
         if !self.attitude_rate_on() {
             return;
         }
-        let unjudged = !self.covered();
+        let coupled = withhold_coupled_flags(
+            &mut self.report.status,
+            &mut self.report.fault_estimate,
+            3,
+            &mut self.att_rate.test,
+        );
+        let unjudged = coupled || !self.covered();
         merge_block_flags(
             &mut self.report.status,
             &mut self.report.fault_estimate,
