@@ -50,9 +50,10 @@ pub(in crate::monitor) fn merge_block_flags<T: Real>(
 }
 
 /// Withholds the monitor's own flags on the three channels from `first`
-/// that the block test finds healthy while a fault it has seen stands on
-/// another channel of the same triad (issue 15, cascades after large
-/// glitches).
+/// that their block test finds healthy while a fault is evident elsewhere:
+/// on another channel of the same triad (seen by this test), or on the
+/// other triad (`elsewhere`: seen by the other block test, see
+/// [`BlockTest::sees_fault`]). Issue 15, cascades after large glitches.
 ///
 /// **Why.** A large gyro fault integrates tens of degrees of attitude
 /// error into the filter within a second; its attitude innovations then
@@ -60,51 +61,47 @@ pub(in crate::monitor) fn merge_block_flags<T: Real>(
 /// filter's own test flags healthy axes (log171, IMU0 g_z +50 °/s for 1 s
 /// at 120 s, 23° of roll: g_y flagged 120.9–124.1 s with an estimate of
 /// −4 °/s while the block test's ratio on g_y stayed at 0.16–0.23 and on
-/// g_z rose to 4.8). The block test compares the raw sensor with the
-/// aiding axis by axis (`attitude_rate`: the body rotation of each
-/// interval, exact at any rate), so a fault on one axis reaches another
-/// only at second order. While it sees a fault on channel `j` — a decision
-/// above its threshold or its flag now, or either during the monitor's
-/// flag on `j` still standing (the filter's error outlasts the windows
-/// that saw the fault) — and judges channel `c ≠ j` below threshold, the
-/// filter's flag on `c` is the coupling of `j`'s error, not evidence of
-/// its own: `c` reads `NotMonitored` (the filter cannot judge it now) and
-/// takes the block test's flag if that rises (the caller merges with
-/// `unjudged`). Nothing changes while the block test has seen no fault,
-/// or cannot judge `c` (ratio 0), so a fault the filter alone detects
-/// keeps its flag. Returns whether a flag was withheld.
+/// g_z rose to 4.8). Likewise an accelerometer fault tilts the filter's
+/// attitude to follow it (then its gyros are flagged) and a gyro fault
+/// leaks gravity into its velocity (then its accelerometers are). The
+/// block tests compare each raw sensor with the aiding directly, axis by
+/// axis (`attitude_rate`: the body rotation of each interval, exact at any
+/// rate; `velocity_increment`: the velocity increments rotated by the
+/// aiding's attitude), so one channel's fault reaches another channel's
+/// test only at second order. While a fault is evident elsewhere and the
+/// test judges channel `c` below its threshold, the filter's flag on `c`
+/// is that fault's coupling, not evidence of its own: `c` reads
+/// `NotMonitored` (the filter cannot judge it now) and takes the block
+/// test's flag if that rises (the caller merges with `unjudged`). Nothing
+/// changes while no test has seen a fault, or this one cannot judge `c`
+/// (ratio 0), so a fault the filter alone detects keeps its flag.
+/// Returns whether a flag was withheld.
 pub(in crate::monitor) fn withhold_coupled_flags<T: Real>(
     status: &mut [ChannelState; 6],
     estimate: &mut ImuVec<T>,
     first: usize,
     test: &mut BlockTest<T>,
+    elsewhere: bool,
 ) -> bool {
     let flagged =
         |s: &ChannelState| matches!(s, ChannelState::FaultPositive | ChannelState::FaultNegative);
+    test.note_flags(core::array::from_fn(|c| {
+        status.get(first + c).is_some_and(flagged)
+    }));
     let d = &test.detail;
-    let sees_now = |c: usize| {
-        d.ratio.get(c).is_some_and(|r| *r >= T::one()) || d.flag.get(c).is_some_and(|f| *f != 0)
-    };
     let healthy: [bool; 3] = core::array::from_fn(|c| {
         d.ratio
             .get(c)
             .is_some_and(|r| *r > T::zero() && *r < T::one())
             && d.flag.get(c).is_some_and(|f| *f == 0)
     });
-    let now: [bool; 3] = core::array::from_fn(sees_now);
-    for (c, seen) in test.seen_in_flag.iter_mut().enumerate() {
-        let on = status.get(first + c).is_some_and(flagged);
-        *seen = on && (*seen || now.get(c).copied().unwrap_or(false));
-    }
-    let sees: [bool; 3] = core::array::from_fn(|c| {
-        now.get(c).copied().unwrap_or(false) || test.seen_in_flag.get(c).copied().unwrap_or(false)
-    });
+    let sees: [bool; 3] = core::array::from_fn(|c| test.sees(c));
     let mut withheld = false;
     for c in 0..3 {
         let (Some(st), Some(e)) = (status.get_mut(first + c), estimate.get_mut(first + c)) else {
             continue;
         };
-        let other = (0..3).any(|j| j != c && sees.get(j).copied().unwrap_or(false));
+        let other = elsewhere || (0..3).any(|j| j != c && sees.get(j).copied().unwrap_or(false));
         if flagged(st) && healthy.get(c).copied().unwrap_or(false) && other {
             *st = ChannelState::NotMonitored;
             *e = T::zero();
@@ -140,7 +137,13 @@ mod tests {
         let mut est = ImuVec::<f64>::from_column_slice(&[0.0, 0.0, 0.0, 0.0, -0.07, 0.2]);
         // g_z above threshold (not yet confirmed), g_y well below it.
         let mut t = test_with([0.05, 0.2, 4.8], [0, 0, 0]);
-        assert!(withhold_coupled_flags(&mut status, &mut est, 3, &mut t));
+        assert!(withhold_coupled_flags(
+            &mut status,
+            &mut est,
+            3,
+            &mut t,
+            false
+        ));
         assert_eq!(
             status,
             [
@@ -167,7 +170,8 @@ mod tests {
             &mut acc,
             &mut est,
             0,
-            &mut test_with([0.1, 0.1, 0.1], [0; 3])
+            &mut test_with([0.1, 0.1, 0.1], [0; 3]),
+            false
         ));
         assert_eq!(acc[0], FaultPositive);
     }
@@ -197,7 +201,7 @@ mod tests {
             let mut est = ImuVec::<f64>::zeros();
             let mut t = test_with(ratio, flag);
             assert!(
-                !withhold_coupled_flags(&mut status, &mut est, 3, &mut t),
+                !withhold_coupled_flags(&mut status, &mut est, 3, &mut t, false),
                 "{ratio:?}"
             );
             assert_eq!(status, flagged, "{ratio:?} {flag:?}");
@@ -206,7 +210,13 @@ mod tests {
         let mut status = flagged;
         let mut est = ImuVec::<f64>::zeros();
         let mut t = test_with([0.9, 0.3, 0.5], [1, 0, 0]);
-        assert!(withhold_coupled_flags(&mut status, &mut est, 3, &mut t));
+        assert!(withhold_coupled_flags(
+            &mut status,
+            &mut est,
+            3,
+            &mut t,
+            false
+        ));
         assert_eq!(status[4], NotMonitored);
         assert_eq!(status[5], NotMonitored);
     }
@@ -224,17 +234,114 @@ mod tests {
         let mut est = ImuVec::<f64>::zeros();
         let mut t = test_with([0.1, 0.2, 4.8], [0, 0, 0]);
         let mut status = both;
-        assert!(withhold_coupled_flags(&mut status, &mut est, 3, &mut t));
+        assert!(withhold_coupled_flags(
+            &mut status,
+            &mut est,
+            3,
+            &mut t,
+            false
+        ));
         // The windows no longer hold the fault, the filter still flags g_z.
         t.detail.ratio = [0.1, 0.2, 0.7];
         let mut status = both;
-        assert!(withhold_coupled_flags(&mut status, &mut est, 3, &mut t));
+        assert!(withhold_coupled_flags(
+            &mut status,
+            &mut est,
+            3,
+            &mut t,
+            false
+        ));
         assert_eq!(status[4], NotMonitored);
         // g_z's flag ended: a later flag on g_y alone is the filter's own.
         let mut status = [Healthy, Healthy, Healthy, Healthy, Healthy, Healthy];
-        assert!(!withhold_coupled_flags(&mut status, &mut est, 3, &mut t));
+        assert!(!withhold_coupled_flags(
+            &mut status,
+            &mut est,
+            3,
+            &mut t,
+            false
+        ));
         let mut status = both;
-        assert!(!withhold_coupled_flags(&mut status, &mut est, 3, &mut t));
+        assert!(!withhold_coupled_flags(
+            &mut status,
+            &mut est,
+            3,
+            &mut t,
+            false
+        ));
         assert_eq!(status, both);
+    }
+
+    #[test]
+    fn a_fault_the_other_triads_test_sees_withholds_what_this_test_contradicts() {
+        // Accelerometer flags the velocity test judges healthy, a gyro
+        // fault seen by the gyro test (`elsewhere`).
+        let mut status = [
+            FaultPositive,
+            Healthy,
+            FaultNegative,
+            FaultPositive,
+            Healthy,
+            Healthy,
+        ];
+        let mut est = ImuVec::<f64>::from_column_slice(&[1.0, 0.0, -1.0, 0.5, 0.0, 0.0]);
+        let mut vel = test_with([0.3, 0.2, 1.5], [0, 0, 0]);
+        assert!(withhold_coupled_flags(
+            &mut status,
+            &mut est,
+            0,
+            &mut vel,
+            true
+        ));
+        // a_z is above the velocity test's threshold: its flag stands.
+        assert_eq!(
+            status,
+            [
+                NotMonitored,
+                Healthy,
+                FaultNegative,
+                FaultPositive,
+                Healthy,
+                Healthy
+            ]
+        );
+        assert_eq!(est[0], 0.0);
+        // Without a fault elsewhere, a_z seen by this test still withholds a_x.
+        let mut status = [
+            FaultPositive,
+            Healthy,
+            FaultNegative,
+            Healthy,
+            Healthy,
+            Healthy,
+        ];
+        assert!(withhold_coupled_flags(
+            &mut status,
+            &mut est,
+            0,
+            &mut vel,
+            false
+        ));
+        assert_eq!(status[0], NotMonitored);
+        // Nothing seen anywhere: both stand.
+        let mut quiet = test_with([0.3, 0.2, 0.4], [0, 0, 0]);
+        let mut status = [
+            FaultPositive,
+            Healthy,
+            FaultNegative,
+            Healthy,
+            Healthy,
+            Healthy,
+        ];
+        assert!(!withhold_coupled_flags(
+            &mut status,
+            &mut est,
+            0,
+            &mut quiet,
+            false
+        ));
+        assert_eq!(status[0], FaultPositive);
+        assert!(!quiet.sees_fault());
+        assert!(vel.sees_fault());
     }
 }

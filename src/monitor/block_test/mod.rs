@@ -358,6 +358,39 @@ impl<T: Real> BlockTest<T> {
         }
     }
 
+    /// Updates, from the monitor's own flags on the three channels, what
+    /// the test has seen during them (`seen_in_flag`): a fault seen (a
+    /// decision above threshold, or the test's flag) while the monitor's
+    /// flag on that channel stands is remembered until that flag ends —
+    /// the filter's error outlasts the windows that saw the fault.
+    pub fn note_flags(&mut self, monitor_flags: [bool; 3]) {
+        for (c, on) in monitor_flags.iter().enumerate() {
+            let now = self.sees_now(c);
+            if let Some(seen) = self.seen_in_flag.get_mut(c) {
+                *seen = *on && (*seen || now);
+            }
+        }
+    }
+
+    /// The last decision on channel `c` was above threshold, or the test
+    /// flags it.
+    fn sees_now(&self, c: usize) -> bool {
+        self.detail.ratio.get(c).is_some_and(|r| *r >= T::one())
+            || self.detail.flag.get(c).is_some_and(|f| *f != 0)
+    }
+
+    /// The test sees a fault on channel `c`: now, or during the monitor's
+    /// flag on it still standing (`note_flags`).
+    pub fn sees(&self, c: usize) -> bool {
+        self.sees_now(c) || self.seen_in_flag.get(c).copied().unwrap_or(false)
+    }
+
+    /// The test sees a fault on some channel (`sees`): evidence for the
+    /// other triad's `withhold_coupled_flags`.
+    pub fn sees_fault(&self) -> bool {
+        (0..3).any(|c| self.sees(c))
+    }
+
     /// The test's flag on channel `c` is reported: the UKF's own test has
     /// not flagged that channel within the longest window, nor had when the
     /// flag was last confirmed. Once the UKF

@@ -144,16 +144,25 @@ impl<T: Real> OtsukfMonitor<T> {
         let att = b.attitude_rate.map(|_| &mut self.att_rate.test);
         #[cfg(not(feature = "attitude-rate-test"))]
         let att: Option<&mut crate::monitor::block_test::BlockTest<T>> = None;
+        // A fault one test sees is evidence for the other triad's
+        // `withhold_coupled_flags`: the gyro test's (from the last epoch)
+        // for the accelerometers, the velocity test's for the gyros.
+        let mut elsewhere = att.as_ref().is_some_and(|t| t.sees_fault());
         for (first, test) in [(0, vel), (3, att)] {
             if let Some(t) = test {
                 // In a hold-off the channels read `NotMonitored`; a block
                 // test's flag still shows (as before the hold-off).
                 let held = self.holdoff > T::zero();
-                // The fault estimate's flag on a gyro the test finds
-                // healthy while it sees a fault on another gyro is that
-                // fault's coupling (`withhold_coupled_flags`).
-                let coupled = first == 3
-                    && withhold_coupled_flags(&mut r.status, &mut r.fault_estimate, first, t);
+                // The fault estimate's flag on a channel the test finds
+                // healthy while a fault is evident elsewhere is that
+                // fault's coupling.
+                let coupled = withhold_coupled_flags(
+                    &mut r.status,
+                    &mut r.fault_estimate,
+                    first,
+                    t,
+                    elsewhere,
+                );
                 merge_block_flags(
                     &mut r.status,
                     &mut r.fault_estimate,
@@ -161,6 +170,9 @@ impl<T: Real> OtsukfMonitor<T> {
                     t,
                     held || coupled,
                 );
+                elsewhere = t.sees_fault();
+            } else {
+                elsewhere = false;
             }
         }
     }

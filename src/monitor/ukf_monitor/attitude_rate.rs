@@ -71,9 +71,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// Adds the test's flags to the report: a gyro channel the UKF finds
     /// healthy is reported faulty while the test flags it, with the window
     /// mean as its estimate. A UKF flag on a gyro the test finds healthy
-    /// while it sees a fault on another gyro is withheld first (the
-    /// coupling of that fault's attitude error, `withhold_coupled_flags`).
-    pub(in crate::monitor::ukf_monitor) fn att_rate_apply(&mut self) {
+    /// while a fault is evident on another gyro (this test) or an
+    /// accelerometer (`elsewhere`: the velocity test) is withheld first,
+    /// that fault's coupling (`withhold_coupled_flags`).
+    pub(in crate::monitor::ukf_monitor) fn att_rate_apply(&mut self, elsewhere: bool) {
         if !self.attitude_rate_on() {
             return;
         }
@@ -82,6 +83,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             &mut self.report.fault_estimate,
             3,
             &mut self.att_rate.test,
+            elsewhere,
         );
         let unjudged = coupled || !self.covered();
         merge_block_flags(
@@ -91,6 +93,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             &mut self.att_rate.test,
             unjudged,
         );
+    }
+
+    /// The test sees a gyro fault (`BlockTest::sees_fault`); false when off.
+    pub(in crate::monitor::ukf_monitor) fn att_rate_sees_fault(&self) -> bool {
+        self.attitude_rate_on() && self.att_rate.test.sees_fault()
     }
 
     /// The test is quiet (every ratio below half its threshold) or off: the

@@ -13,7 +13,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     #[inline(always)]
     pub(super) fn att_rate_epoch(&mut self, _aiding: &Measurement<T>) {}
     #[inline(always)]
-    pub(super) fn att_rate_apply(&mut self) {}
+    pub(super) fn att_rate_apply(&mut self, _elsewhere: bool) {}
+    #[inline(always)]
+    pub(super) fn att_rate_sees_fault(&self) -> bool {
+        false
+    }
     #[inline(always)]
     pub(super) fn att_rate_quiet(&self) -> bool {
         true

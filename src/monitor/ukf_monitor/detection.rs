@@ -73,9 +73,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 } else {
                     self.not_judged();
                 }
-                self.att_rate_apply();
+                // Each test's view of the other triad (`withhold_coupled_flags`).
+                let accel_fault = self.vel_inc_sees_fault();
+                self.att_rate_apply(accel_fault);
                 let tainted = self.velocity_tainted();
-                self.vel_inc_apply(tainted);
+                let gyro_fault = self.att_rate_sees_fault();
+                self.vel_inc_apply(tainted, gyro_fault);
                 let f = if self.power_up.any() && !held {
                     instant(self)
                 } else {

@@ -4,7 +4,9 @@
 
 use crate::math::Real;
 use crate::model::{ImuVec, Measurement};
-use crate::monitor::block_test::{any_flag, merge_block_flags, EpochContext, IntervalTest};
+use crate::monitor::block_test::{
+    any_flag, merge_block_flags, withhold_coupled_flags, EpochContext, IntervalTest,
+};
 use crate::monitor::ukf_monitor::realign::flag_reference;
 use crate::monitor::ukf_monitor::UkfMonitor;
 use crate::monitor::{ChannelState, Phase, VelocityIncrementDetail};
@@ -83,10 +85,24 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// UKF finds healthy is reported faulty while the test flags it, with
     /// the window mean as its estimate. `tainted`: the UKF's innovations
     /// did not judge the accelerometers this epoch (`velocity_tainted`),
-    /// so their `NotMonitored` channels take the test's flags.
-    pub(in crate::monitor::ukf_monitor) fn vel_inc_apply(&mut self, tainted: bool) {
+    /// so their `NotMonitored` channels take the test's flags. A UKF flag on
+    /// an accelerometer the test finds healthy while a fault is evident on
+    /// another accelerometer (this test) or a gyro (`elsewhere`: the
+    /// gyro/attitude test) is withheld first (`withhold_coupled_flags`).
+    pub(in crate::monitor::ukf_monitor) fn vel_inc_apply(
+        &mut self,
+        tainted: bool,
+        elsewhere: bool,
+    ) {
         if self.vel_inc_on() {
-            let unjudged = tainted || !self.covered();
+            let coupled = withhold_coupled_flags(
+                &mut self.report.status,
+                &mut self.report.fault_estimate,
+                0,
+                &mut self.vel_inc.test,
+                elsewhere,
+            );
+            let unjudged = tainted || coupled || !self.covered();
             merge_block_flags(
                 &mut self.report.status,
                 &mut self.report.fault_estimate,
@@ -95,6 +111,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 unjudged,
             );
         }
+    }
+
+    /// The test sees an accelerometer fault (`BlockTest::sees_fault`);
+    /// false when off.
+    pub(in crate::monitor::ukf_monitor) fn vel_inc_sees_fault(&self) -> bool {
+        self.vel_inc_on() && self.vel_inc.test.sees_fault()
     }
 
     /// A gyro fault's attitude error in the velocity (issue 15). The

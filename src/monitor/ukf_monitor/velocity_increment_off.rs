@@ -13,7 +13,11 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     #[inline(always)]
     pub(super) fn vel_inc_epoch(&mut self, _aiding: &Measurement<T>) {}
     #[inline(always)]
-    pub(super) fn vel_inc_apply(&mut self, _tainted: bool) {}
+    pub(super) fn vel_inc_apply(&mut self, _tainted: bool, _elsewhere: bool) {}
+    #[inline(always)]
+    pub(super) fn vel_inc_sees_fault(&self) -> bool {
+        false
+    }
     #[inline(always)]
     pub(super) fn velocity_tainted(&mut self) -> bool {
         false
