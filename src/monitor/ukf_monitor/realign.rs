@@ -306,7 +306,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         self.reset_filter(x, p);
         // The state history (aiding latency) follows the re-aligned state.
-        if self.delay_steps > 0 || self.velocity_delay_steps.is_some() {
+        if self.delay_steps > 0 {
             let mut h = heapless::HistoryBuf::<StateVec<T>, { MAX_DELAY_STEPS + 1 }>::new();
             for _ in 0..self.history.len() {
                 h.write(x);
