@@ -51,6 +51,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // The state history serves a configured or estimated aiding latency.
         if self.keeps_history() {
             self.history.write(*self.ukf.state());
+            self.history_fresh = self.history_fresh.saturating_add(1);
             self.delay_estimator.tick();
             self.heading.tick();
         }

@@ -150,6 +150,9 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     /// The velocity aiding's own latency in IMU periods
     /// (`velocity_delay_s`; `None`: it shares `delay_steps`).
     velocity_delay_steps: Option<usize>,
+    /// States written to the history since the filter was last
+    /// (re-)aligned: older ones are of another trajectory.
+    history_fresh: usize,
     /// Online latency estimate (when `estimate_aiding_delay`).
     delay_estimator: DelayEstimator<T>,
     /// The lag the nominal bias and inflation were learnt at.
@@ -248,6 +251,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             velocity_delay_steps: cfg
                 .velocity_delay_s
                 .map(|d| (d / cfg.imu_period).round().to_f64() as usize),
+            history_fresh: 0,
             delay_estimator: DelayEstimator::new(),
             learned_lag: 0,
             heading: heading::HeadingEstimator::new(),
@@ -538,6 +542,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         };
         let s = self.cfg.initial_sigma;
         self.reset_filter(x, Mat6::from_diagonal(&s.component_mul(&s)));
+        self.history_fresh = 0;
         self.sensitivity = Mat6::zeros();
         self.tracker = fault_track::FaultTracker::new();
         self.phase = Phase::Converging;

@@ -17,8 +17,8 @@
 //!
 //! Limits: `d` up to the history's [`MAX_DELAY_STEPS`](super::MAX_DELAY_STEPS)
 //! IMU periods (a longer one is refused by `validate`); until the history
-//! holds `d` states (the first periods after start or a re-alignment) the
-//! velocity is fused at the horizon untranslated; the lag is configured,
+//! holds `d` states written since the last (re-)alignment the velocity is
+//! fused at the horizon untranslated; the lag is configured,
 //! not estimated (the CLI fits it offline on the learning span).
 
 use super::UkfMonitor;
@@ -49,7 +49,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         omega: &Vector3<T>,
     ) -> Option<Measurement<T>> {
         let lag = self.velocity_delay_steps?;
-        if lag == self.delay_steps || !aiding.available.iter().take(3).all(|a| *a) {
+        // A state from before the last (re-)alignment is of another
+        // trajectory: the change to it would carry the re-alignment's jump
+        // (log171, attitude cut 120–150 s: 5 events on IMU1 after it).
+        if lag == self.delay_steps
+            || lag >= self.history_fresh
+            || !aiding.available.iter().take(3).all(|a| *a)
+        {
             return None;
         }
         let own = self.history_at(lag)?;
@@ -88,6 +94,7 @@ mod tests {
             cfg.aiding_delay_s = horizon as f64 * dt;
             cfg.velocity_delay_s = Some(own as f64 * dt);
             let mut m = UkfMonitor::<f64, 10>::new(cfg).unwrap();
+            m.history_fresh = MAX_DELAY_STEPS + 1;
             // The history's newest state is the one at t = 1 s.
             let n = MAX_DELAY_STEPS + 1;
             for k in 0..n {
@@ -107,7 +114,11 @@ mod tests {
             let out = m.velocity_at_horizon(&aiding, &center, &omega).unwrap();
             let err: MeasVec<f64> = out.z - truth(horizon);
             assert!(err.amax() < 1e-12, "{kind:?} {horizon}/{own}: {err:?}");
+            // Nor across a re-alignment (states older than it).
+            m.history_fresh = own;
+            assert!(m.velocity_at_horizon(&aiding, &center, &omega).is_none());
             // Without its own latency nothing is translated.
+            m.history_fresh = MAX_DELAY_STEPS + 1;
             m.velocity_delay_steps = None;
             assert!(m.velocity_at_horizon(&aiding, &center, &omega).is_none());
         }
