@@ -42,6 +42,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     /// horizon `center` (module notes); `None` when nothing is to be
     /// translated (no own velocity latency, no complete velocity triad, or
     /// the history does not reach back that far yet).
+    #[inline(never)] // the two predictions stay off `update`'s frame (issue 17)
     pub(super) fn velocity_at_horizon(
         &self,
         aiding: &Measurement<T>,
