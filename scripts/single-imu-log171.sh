@@ -59,6 +59,9 @@ if s.get("aiding_delay_s"):
         ", ".join("%.2f" % h for h in s["heading_offset_deg"])))
 print("  velocity aiding delay (%s): %s s" % (s["velocity_delay_mode"],
     ", ".join("%.2f" % d for d in s["velocity_delay_s"])))
+if s.get("ukf_velocity_lag_s"):
+    print("  UKF velocity lag compensated (--velocity-lag): %s s" % ", ".join(
+        "%.2f" % d for d in s["ukf_velocity_lag_s"]))
 if s.get("velocity_increment_lag_s"):
     print("  velocity-increment test: GNSS lag %s s; accel offset %s m/s2" % (
         ", ".join("%.1f" % d for d in s["velocity_increment_lag_s"]),

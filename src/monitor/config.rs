@@ -134,6 +134,16 @@ pub struct UkfMonitorConfig<T> {
     /// learning, learning restarts. Read it with
     /// [`UkfMonitor::aiding_delay_estimate`](super::UkfMonitor::aiding_delay_estimate).
     pub estimate_aiding_delay: bool,
+    /// Latency of the velocity aiding alone, s, when it differs from the
+    /// attitude's (PX4 EKF2's `EKF2_GPS_DELAY` beside `EKF2_EV_DELAY`):
+    /// `None` (default) fuses the velocity at the same horizon as the
+    /// attitude (`aiding_delay_s` or its estimate). `Some(d)`: each velocity
+    /// epoch is brought from its own time to that horizon by the
+    /// IMU-propagated change the state history holds between the two,
+    /// `z_v + h_v(x[horizon]) − h_v(x[d])`, as the OTSUKF brings a late
+    /// velocity to now. At most [`MAX_DELAY_STEPS`](super::MAX_DELAY_STEPS)
+    /// IMU periods (the history's length).
+    pub velocity_delay_s: Option<T>,
     /// Learn a constant heading offset between the attitude aiding's frame
     /// and the IMU's (issue 15) from the GNSS velocity's horizontal changes
     /// against the IMU-propagated ones, bounded to ±10°, paused while a
@@ -272,6 +282,7 @@ impl<T: Real> UkfMonitorConfig<T> {
             imu_period: T::lit(0.01),
             aiding_delay_s: T::zero(),
             estimate_aiding_delay: false,
+            velocity_delay_s: None,
             estimate_heading_offset: false,
             fault_psd: None,
             attitude_rate: None,
@@ -375,6 +386,13 @@ impl<T: Real> UkfMonitorConfig<T> {
             || delay_steps > T::lit(super::MAX_DELAY_STEPS as f64)
         {
             return Err(ConfigError::AidingDelay);
+        }
+        if let Some(d) = self.velocity_delay_s {
+            let steps = d / self.imu_period;
+            if !steps.finite() || steps < T::zero() || steps > T::lit(super::MAX_DELAY_STEPS as f64)
+            {
+                return Err(ConfigError::VelocityDelay);
+            }
         }
         if !(self.alpha > 0.0 && self.alpha <= 0.5) {
             return Err(ConfigError::TTest);

@@ -19,6 +19,8 @@ pub enum ConfigError {
     OutOfRange(&'static str),
     /// `aiding_delay_s` is negative or longer than the state history.
     AidingDelay,
+    /// `velocity_delay_s` is negative or longer than the state history.
+    VelocityDelay,
     /// This option needs a cargo feature the crate was built without
     /// (`estimate_aiding_delay` and `estimate_heading_offset`:
     /// `aiding-estimators`; `fault_psd`: `fault-tracking`; M2 `aiding`:
@@ -37,6 +39,7 @@ impl ConfigError {
             Self::TTest => "alpha",
             Self::NonPositive(f) | Self::OutOfRange(f) | Self::NotCompiled(f) => f,
             Self::AidingDelay => "aiding_delay_s",
+            Self::VelocityDelay => "velocity_delay_s",
         }
     }
 
@@ -69,7 +72,7 @@ impl fmt::Display for ConfigError {
             ),
             Self::NonPositive(_) => write!(f, "{field}: must be finite and positive"),
             Self::OutOfRange(_) => write!(f, "{field}: not finite or outside its range"),
-            Self::AidingDelay => write!(
+            Self::AidingDelay | Self::VelocityDelay => write!(
                 f,
                 "{field}: negative, or longer than the state history (MAX_DELAY_STEPS IMU periods)"
             ),

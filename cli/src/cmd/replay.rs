@@ -103,13 +103,18 @@ pub(crate) struct Args {
     /// sample is then fused at the row it describes. Either monitor.
     #[arg(long, value_parser = parse_delay, default_value = "0")]
     velocity_delay: imu_fdi_cli::eval::replay::AidingDelay,
-    /// OTSUKF: latency of the GNSS velocity that the monitor compensates
-    /// itself, causally (each velocity brought to the present by the
-    /// IMU-propagated change over the lag), seconds, or `auto` (default) to
-    /// fit it as `--velocity-delay auto` does, on each IMU's learning span
-    /// (flight profile with GNSS aiding; 0 otherwise).
-    #[arg(long, value_parser = parse_delay, default_value = "auto")]
-    velocity_lag: imu_fdi_cli::eval::replay::AidingDelay,
+    /// Latency of the GNSS velocity that the monitor compensates itself,
+    /// causally, seconds, or `auto` to fit it as `--velocity-delay auto`
+    /// does, on each IMU's learning span (flight profile with GNSS aiding;
+    /// 0 otherwise). OTSUKF: each velocity brought to the present by the
+    /// IMU-propagated change over the lag; `auto` by default. UKF monitor:
+    /// the velocity's own latency in the core (`velocity_delay_s`: brought
+    /// to the attitude's fusion horizon, `--aiding-delay`, by the state
+    /// history; at most 32 IMU periods); without the option it shares the
+    /// attitude's latency. Unlike `--velocity-delay` (which re-times the
+    /// log's rows, offline) this is what firmware can do.
+    #[arg(long, value_parser = parse_delay)]
+    velocity_lag: Option<imu_fdi_cli::eval::replay::AidingDelay>,
     /// Flight profile, either monitor: the gyro/attitude-aiding consistency
     /// test (the gyro integrated between attitude epochs against the
     /// aiding's rotation over 2.5–10 s windows, their spread learnt on the
@@ -383,6 +388,16 @@ pub(crate) fn run(args: Args) -> Result<()> {
             .collect::<Vec<_>>()
             .join(", ")
     );
+    if !s.ukf_velocity_lag_s.is_empty() {
+        note!(
+            "  UKF velocity lag compensated: {} s",
+            s.ukf_velocity_lag_s
+                .iter()
+                .map(|x| format!("{x:.3}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     if !s.otsukf_velocity_lag_s.is_empty() {
         note!(
             "  OTSUKF velocity lag compensated: {} s",

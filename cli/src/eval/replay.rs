@@ -128,12 +128,13 @@ pub fn replay_observed(
         // The OTSUKF's attitude latency (`--aiding-delay`): the attitude
         // rows moved back by it, so the velocity fit rotates the specific
         // force by the attitude of its own time (`attitude_lag.rs`).
-        let att_rows = match (opts.monitor, opts.aiding_delay) {
-            (MonitorKind::Otsukf, AidingDelay::Fixed(d)) => (d / dt).round().max(0.0) as usize,
-            (MonitorKind::Otsukf, AidingDelay::Auto) => {
+        // The UKF monitor's likewise: with a late attitude its latency would
+        // otherwise enter the velocity's fit.
+        let att_rows = match opts.aiding_delay {
+            AidingDelay::Fixed(d) => (d / dt).round().max(0.0) as usize,
+            AidingDelay::Auto => {
                 super::attitude_lag::estimate(&times, &imu, &att, MAX_DELAY_STEPS).unwrap_or(0)
             }
-            (MonitorKind::Ukf, _) => 0,
         };
         if att_rows > 0 {
             att = att.iter().skip(att_rows).copied().collect();
@@ -144,7 +145,11 @@ pub fn replay_observed(
             &imu,
             &head.iter().map(|r| avail3(r, 0)).collect::<Vec<_>>(),
             &att,
-            (0.5 / dt).round() as usize,
+            // The UKF monitor's state history bounds the lag it compensates.
+            match opts.monitor {
+                MonitorKind::Otsukf => (0.5 / dt).round() as usize,
+                MonitorKind::Ukf => ((0.5 / dt).round() as usize).min(MAX_DELAY_STEPS),
+            },
         ))
     };
     for k in 0..imus {
@@ -158,20 +163,29 @@ pub fn replay_observed(
                 fit.map_or(0, |l| l.rows)
             }
         };
-        // The OTSUKF's own (causal) compensation: by default in the flight
+        // The monitor's own (causal) compensation: the OTSUKF's by default,
+        // the UKF monitor's when asked (`--velocity-lag`), in the flight
         // profile with GNSS aiding, unless the rows are re-timed above.
-        let otsukf_lag_s = match (opts.monitor, opts.velocity_lag) {
-            (MonitorKind::Otsukf, AidingDelay::Fixed(d)) => Some(d),
-            (MonitorKind::Otsukf, AidingDelay::Auto)
+        let own_lag = match opts.monitor {
+            MonitorKind::Otsukf => Some(opts.velocity_lag.unwrap_or(AidingDelay::Auto)),
+            MonitorKind::Ukf => opts.velocity_lag,
+        };
+        let own_lag_s = match own_lag {
+            Some(AidingDelay::Fixed(d)) => Some(d),
+            Some(AidingDelay::Auto)
                 if lag == 0 && profile == Profile::Flight && kind == AidingKind::GnssAttitude =>
             {
                 Some(fit_lag(k)?.map_or(0.0, |l| l.rows as f64 * dt))
             }
-            (MonitorKind::Otsukf, AidingDelay::Auto) => Some(0.0),
-            (MonitorKind::Ukf, _) => None,
+            Some(AidingDelay::Auto) => Some(0.0),
+            None => None,
         };
-        if let Some(l) = otsukf_lag_s {
-            sum.otsukf_velocity_lag_s.push(l);
+        let otsukf_lag_s = own_lag_s.filter(|_| opts.monitor == MonitorKind::Otsukf);
+        if let Some(l) = own_lag_s {
+            match opts.monitor {
+                MonitorKind::Otsukf => sum.otsukf_velocity_lag_s.push(l),
+                MonitorKind::Ukf => sum.ukf_velocity_lag_s.push(l),
+            }
         }
         sum.velocity_delay_s.push(lag as f64 * dt);
         vel_lag.push(lag);
@@ -208,6 +222,9 @@ pub fn replay_observed(
             AidingDelay::Auto => cfg.estimate_aiding_delay = true,
         }
         cfg.estimate_heading_offset = opts.estimate_heading_offset;
+        if opts.monitor == MonitorKind::Ukf {
+            cfg.velocity_delay_s = own_lag_s;
+        }
         // The OTSUKF takes `--aiding-delay` as its attitude aiding's latency
         // (its GNSS velocity's is `--velocity-lag`); it has no heading
         // offset estimate.

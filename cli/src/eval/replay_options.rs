@@ -59,11 +59,14 @@ pub struct ReplayOptions {
     /// describes (the log is at hand: the offline equivalent of delayed
     /// fusion at a known lag).
     pub velocity_delay: AidingDelay,
-    /// OTSUKF: the velocity aiding's latency the monitor compensates itself,
-    /// causally (`OtsukfConfig::velocity_lag_s`), fixed or (`Auto`, the
-    /// default) fitted on each IMU's learning span as `velocity_delay`'s
-    /// `auto` is, in the flight profile with GNSS aiding (0 otherwise).
-    pub velocity_lag: AidingDelay,
+    /// The velocity aiding's latency the monitor compensates itself,
+    /// causally, fixed or (`Auto`) fitted on each IMU's learning span as
+    /// `velocity_delay`'s `auto` is, in the flight profile with GNSS aiding
+    /// (0 otherwise). OTSUKF: `OtsukfConfig::velocity_lag_s`, `None` is
+    /// `Auto`. UKF monitor: `UkfMonitorConfig::velocity_delay_s` (the
+    /// velocity brought to the attitude's fusion horizon), `None` shares
+    /// the attitude's latency (`aiding_delay`).
+    pub velocity_lag: Option<AidingDelay>,
     /// Flight profile, either monitor: run the gyro/attitude-aiding
     /// consistency test (`UkfMonitorConfig::attitude_rate`, default on).
     pub attitude_rate: bool,
@@ -113,7 +116,7 @@ impl Default for ReplayOptions {
             aiding_delay: AidingDelay::default(),
             estimate_heading_offset: false,
             velocity_delay: AidingDelay::default(),
-            velocity_lag: AidingDelay::Auto,
+            velocity_lag: None,
             attitude_rate: true,
             velocity_increment: true,
             turn_on_bias: [1.5, 3.0, 5.0 * deg],

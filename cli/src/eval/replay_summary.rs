@@ -138,6 +138,10 @@ pub struct ReplaySummary {
     /// Per IMU, the OTSUKF's own compensated velocity latency
     /// (`--velocity-lag`), s (empty for the UKF monitor).
     pub otsukf_velocity_lag_s: Vec<f64>,
+    /// Per IMU, the UKF monitor's own compensated velocity latency
+    /// (`--velocity-lag`, `UkfMonitorConfig::velocity_delay_s`), s (empty
+    /// without the option and for the OTSUKF).
+    pub ukf_velocity_lag_s: Vec<f64>,
     /// Per IMU (UKF monitor, `--velocity-increment on`): the GNSS lag the
     /// accelerometer/GNSS-velocity test used on the last row, s.
     pub velocity_increment_lag_s: Vec<f64>,

@@ -21,10 +21,12 @@
 //! the last [`DELAY_TAU_BLOCKS`] blocks. Velocity is not compared: its
 //! IMU-propagated change carries the filter's attitude error times g
 //! (1° is 0.34 m/s over a 2 s block), an error shaped by the lag in use,
-//! which pulled the estimate towards that lag. One latency is assumed for
-//! all aiding. PX4 EKF2 takes such latencies as parameters
-//! (`EKF2_GPS_DELAY`, …) and fuses against a delayed horizon; here the
-//! same history serves to estimate them.
+//! which pulled the estimate towards that lag. The estimate is the
+//! attitude's latency, the fusion horizon; a velocity with a latency of
+//! its own is given as `UkfMonitorConfig::velocity_delay_s` and brought to
+//! that horizon (`velocity_delay.rs`), else it shares it. PX4 EKF2 takes
+//! such latencies as parameters (`EKF2_GPS_DELAY`, …) and fuses against a
+//! delayed horizon; here the same history serves to estimate them.
 //!
 //! Limits: lags up to the history length minus the attitude aiding's
 //! interval ([`MAX_DELAY_STEPS`] − 10 = 0.22 s with 10 Hz attitude and a

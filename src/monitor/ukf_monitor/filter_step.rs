@@ -51,6 +51,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // The state history serves a configured or estimated aiding latency.
         if self.keeps_history() {
             self.history.write(*self.ukf.state());
+            self.history_fresh = self.history_fresh.saturating_add(1);
             self.delay_estimator.tick();
             self.heading.tick();
         }
@@ -92,16 +93,22 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // With a known latency, predict the measurement from the state of its
         // time (the history holds one state per IMU step, newest last).
         let delayed = if self.delay_steps > 0 {
-            self.history
-                .oldest_ordered()
-                .rev()
-                .nth(self.delay_steps)
-                .copied()
+            self.history_at(self.delay_steps)
         } else {
             None
         };
         // Centred on the current state this is the ordinary update.
         let center = delayed.unwrap_or(x_prior);
+        // A velocity with its own latency, brought to that horizon
+        // (`velocity_delay.rs`).
+        let translated;
+        let aiding = match self.velocity_at_horizon(aiding, &center, omega) {
+            Some(t) => {
+                translated = t;
+                &translated
+            }
+            None => aiding,
+        };
         // Both forms with the same (infallible-model) error type: one
         // `Result` slot, and the output read where the update left it, not
         // moved into the caller's error type (a 380-byte copy, issue 17).

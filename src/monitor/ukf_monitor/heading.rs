@@ -250,9 +250,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         let z = [aiding.z.x, aiding.z.y];
         let prev = self.heading.prev.replace((z, 0));
         let Some((z0, age)) = prev else { return };
-        // The history's states at the fusion lag and one aiding interval
-        // before it (newest first).
-        let lag = self.delay_steps;
+        // The history's states at the velocity's own lag and one aiding
+        // interval before it (newest first).
+        let lag = self.velocity_lag_steps();
         if lag + age > MAX_DELAY_STEPS {
             self.heading.interrupt();
             return;

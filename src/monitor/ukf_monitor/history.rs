@@ -8,10 +8,13 @@ use crate::math::{wrap_pi, Real};
 use crate::model::{StateVec, ROLL};
 
 impl<T: Real, const W: usize> UkfMonitor<T, W> {
-    /// The state history serves a configured or estimated aiding latency
-    /// and the heading-offset estimate.
+    /// The state history serves a configured or estimated aiding latency,
+    /// the velocity's own latency and the heading-offset estimate.
     pub(super) fn keeps_history(&self) -> bool {
-        self.delay_steps > 0 || self.delay_on() || self.heading_on()
+        self.delay_steps > 0
+            || self.velocity_delay_steps.is_some()
+            || self.delay_on()
+            || self.heading_on()
     }
 
     /// The online aiding-delay estimate runs: configured, and compiled in

@@ -38,6 +38,7 @@ mod power_up;
 #[path = "power_up_off.rs"]
 mod power_up;
 mod realign;
+mod velocity_delay;
 #[cfg(feature = "velocity-increment-test")]
 mod velocity_increment;
 #[cfg(not(feature = "velocity-increment-test"))]
@@ -146,6 +147,12 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     last_h: Mat6<T>,
     last_dt: T,
     delay_steps: usize,
+    /// The velocity aiding's own latency in IMU periods
+    /// (`velocity_delay_s`; `None`: it shares `delay_steps`).
+    velocity_delay_steps: Option<usize>,
+    /// States written to the history since the filter was last
+    /// (re-)aligned: older ones are of another trajectory.
+    history_fresh: usize,
     /// Online latency estimate (when `estimate_aiding_delay`).
     delay_estimator: DelayEstimator<T>,
     /// The lag the nominal bias and inflation were learnt at.
@@ -241,6 +248,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             last_h: Mat6::identity(),
             last_dt: cfg.imu_period,
             delay_steps: (cfg.aiding_delay_s / cfg.imu_period).round().to_f64() as usize,
+            velocity_delay_steps: cfg
+                .velocity_delay_s
+                .map(|d| (d / cfg.imu_period).round().to_f64() as usize),
+            history_fresh: 0,
             delay_estimator: DelayEstimator::new(),
             learned_lag: 0,
             heading: heading::HeadingEstimator::new(),
@@ -531,6 +542,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         };
         let s = self.cfg.initial_sigma;
         self.reset_filter(x, Mat6::from_diagonal(&s.component_mul(&s)));
+        self.history_fresh = 0;
         self.sensitivity = Mat6::zeros();
         self.tracker = fault_track::FaultTracker::new();
         self.phase = Phase::Converging;

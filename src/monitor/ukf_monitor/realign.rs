@@ -305,6 +305,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             self.velocity_tainted = false;
         }
         self.reset_filter(x, p);
+        self.history_fresh = 0;
         // The state history (aiding latency) follows the re-aligned state.
         if self.delay_steps > 0 {
             let mut h = heapless::HistoryBuf::<StateVec<T>, { MAX_DELAY_STEPS + 1 }>::new();

@@ -78,6 +78,9 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             timeout_s: self.cfg.aiding_timeout_s,
             external: self.phase == Phase::Monitoring && any_flag(&self.report.status),
         };
+        // The attitude is carried to its arrival over the latency the UKF
+        // fuses it at.
+        self.vel_inc.set_attitude_delay(self.delay_steps);
         self.vel_inc.aiding_epoch(&cfg, aiding, &ctx);
     }
 

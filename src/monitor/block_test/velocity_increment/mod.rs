@@ -51,13 +51,14 @@
 //! the aiding (it turns the horizontal `Δv`, an end term over a window) and
 //! the GNSS antenna's lever arm.
 
+use heapless::Deque;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 use super::rotation::{from_euler, rotation_exp};
 use super::{BlockTest, ChannelLimits, EpochContext, IntervalTest};
 use crate::math::{try_inverse, Real};
 use crate::model::{ImuVec, Measurement};
-use crate::monitor::{UkfMonitorConfig, VelocityIncrementConfig};
+use crate::monitor::{UkfMonitorConfig, VelocityIncrementConfig, MAX_DELAY_STEPS};
 
 mod aiding_cover;
 #[cfg(test)]
@@ -109,6 +110,12 @@ pub(in crate::monitor) struct VelocityIncrement<T> {
     /// attitude is dropped (`aiding_timeout_s`).
     attitude_age: T,
     max_attitude_age: T,
+    /// The last raw gyro rotations `ω dt`, newest last, and the attitude
+    /// aiding's latency in IMU periods (the UKF monitor's configured or
+    /// estimated one): an attitude epoch is carried over that many of them
+    /// to its arrival (see [`attitude_epoch`](Self::attitude_epoch)).
+    past_rotation: Deque<Vector3<T>, { MAX_DELAY_STEPS + 1 }>,
+    attitude_delay: usize,
     /// The last `DELAY_RING` increments, newest at `head − 1`.
     ring: [Increment<T>; DELAY_RING],
     head: usize,
@@ -164,6 +171,8 @@ impl<T: Real> VelocityIncrement<T> {
             attitude: None,
             attitude_age: T::zero(),
             max_attitude_age: T::lit(f64::INFINITY),
+            past_rotation: Deque::new(),
+            attitude_delay: 0,
             ring: [Increment::zero(); DELAY_RING],
             head: 0,
             filled: 0,
@@ -239,10 +248,25 @@ impl<T: Real> VelocityIncrement<T> {
         self.complete = false;
     }
 
-    /// An attitude-aiding epoch (ZYX Euler angles of body→NED).
+    /// The attitude aiding arrives `steps` IMU periods late (the UKF
+    /// monitor's configured or estimated latency).
+    pub fn set_attitude_delay(&mut self, steps: usize) {
+        self.attitude_delay = steps.min(MAX_DELAY_STEPS);
+    }
+
+    /// An attitude-aiding epoch (ZYX Euler angles of body→NED), carried by
+    /// the raw gyro over the attitude's latency to its arrival: a late
+    /// attitude otherwise turns every increment by `ω·τ` (log171 with its
+    /// attitude 0.3 s late: the lag learnt fell from 0.3 s to 0, trading
+    /// the velocity's lag against the rotation's).
     pub fn attitude_epoch(&mut self, euler: [T; 3]) {
         let [r, p, y] = euler;
-        self.attitude = Some(from_euler(r, p, y));
+        let mut q = from_euler(r, p, y);
+        let skip = self.past_rotation.len().saturating_sub(self.attitude_delay);
+        for w in self.past_rotation.iter().skip(skip) {
+            q *= rotation_exp(w);
+        }
+        self.attitude = Some(q);
         self.attitude_age = T::zero();
     }
 
@@ -253,6 +277,12 @@ impl<T: Real> VelocityIncrement<T> {
         // a_x and a_y flagged on every IMU from 10 s in, the gravity leaked
         // through the gyro-carried tilt), so nothing is integrated until
         // the next attitude epoch.
+        if self.attitude_delay > 0 {
+            if self.past_rotation.is_full() {
+                self.past_rotation.pop_front();
+            }
+            let _ = self.past_rotation.push_back(rate * dt);
+        }
         self.attitude_age += dt;
         if self.attitude_age > self.max_attitude_age {
             self.attitude = None;
