@@ -27,13 +27,19 @@ fn replay(extra: &[&str]) -> serde_json::Value {
 
 /// `replay` from `from` s to 235 s, with `extra`.
 fn replay_from(from: &str, extra: &[&str]) -> serde_json::Value {
+    replay_with(&data("ap_log171_attitude_quat.csv"), from, extra)
+}
+
+/// `replay` of log171 from `from` s to 235 s with the attitude extract
+/// `att` and the options `extra`: its JSON summary.
+fn replay_with(att: &std::path::Path, from: &str, extra: &[&str]) -> serde_json::Value {
     let out = bin()
         .arg("replay")
         .arg(data("ap_log171_3imu.csv"))
         .arg("--gnss")
         .arg(data("ap_log171_gps_vel_ned.csv"))
         .arg("--att")
-        .arg(data("ap_log171_attitude_quat.csv"))
+        .arg(att)
         .args(["--from", from, "--to", "235", "--json"])
         .args(extra)
         .output()
@@ -107,19 +113,8 @@ fn estimators_find_no_attitude_lag_and_a_quarter_second_gps_lag() {
     for k in 0..3 {
         let d = lagged["velocity_delay_s"][k].as_f64().unwrap();
         assert!((0.21..=0.25).contains(&d), "IMU{k}: {d}");
-        for ch in 0..2 {
-            let before = plain["innovation_inflation_factor"][k][ch]
-                .as_f64()
-                .unwrap();
-            let after = lagged["innovation_inflation_factor"][k][ch]
-                .as_f64()
-                .unwrap();
-            assert!(
-                before > 7.0 && after < 2.5,
-                "IMU{k} v{ch}: {before} → {after}"
-            );
-        }
     }
+    assert_inflation_falls(&plain, &lagged, 2.5);
     // The OTSUKF takes `--aiding-delay` as its attitude latency (below)
     // but has no heading-offset estimate: the replay says so.
     let out = bin()
@@ -157,6 +152,29 @@ fn late_attitude(late: f64) -> std::path::PathBuf {
     att
 }
 
+/// The learnt velocity inflation (north, east) of every IMU: above 7 in
+/// `plain`, where the GNSS velocity's lag is not compensated, and below
+/// `below` in `lagged`, where it is.
+fn assert_inflation_falls(plain: &serde_json::Value, lagged: &serde_json::Value, below: f64) {
+    for k in 0..3 {
+        for ch in 0..2 {
+            let f =
+                |v: &serde_json::Value| v["innovation_inflation_factor"][k][ch].as_f64().unwrap();
+            let (before, after) = (f(plain), f(lagged));
+            assert!(
+                before > 7.0 && after < below,
+                "IMU{k} v{ch}: {before} → {after}"
+            );
+        }
+    }
+}
+
+/// The replay's JSON summary of log171, 80–235 s, with the attitude
+/// extract `att` and the options `extra`.
+fn replay_late(att: &std::path::Path, extra: &[&str]) -> serde_json::Value {
+    replay_with(att, "80", extra)
+}
+
 /// The UKF monitor with two aiding latencies: the attitude extract 0.3 s
 /// late (estimated online, `--aiding-delay auto`) and the GPS velocity
 /// ≈ 0.22 s late (fitted on the learning span with the attitude moved back
@@ -172,25 +190,11 @@ fn late_attitude(late: f64) -> std::path::PathBuf {
 #[test]
 fn ukf_fuses_each_aiding_source_at_its_own_latency() {
     let att = late_attitude(0.3);
-    let run = |extra: &[&str]| -> serde_json::Value {
-        let out = bin()
-            .arg("replay")
-            .arg(data("ap_log171_3imu.csv"))
-            .arg("--gnss")
-            .arg(data("ap_log171_gps_vel_ned.csv"))
-            .arg("--att")
-            .arg(&att)
-            .args(["--from", "80", "--to", "235", "--json", "--monitor", "ukf"])
-            .args(["--aiding-delay", "auto"])
-            .args(extra)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        serde_json::from_slice(&out.stdout).unwrap()
+    let run = |extra: &[&str]| {
+        replay_late(
+            &att,
+            &[&["--monitor", "ukf", "--aiding-delay", "auto"], extra].concat(),
+        )
     };
     let shared = run(&[]);
     assert!(
@@ -212,20 +216,7 @@ fn ukf_fuses_each_aiding_source_at_its_own_latency() {
     let frozen = ["--monitor", "ukf", "--inflation-memory", "0"];
     let plain = replay(&frozen);
     let lagged = replay(&[&frozen[..], &["--velocity-lag", "auto"]].concat());
-    for k in 0..3 {
-        for ch in 0..2 {
-            let before = plain["innovation_inflation_factor"][k][ch]
-                .as_f64()
-                .unwrap();
-            let after = lagged["innovation_inflation_factor"][k][ch]
-                .as_f64()
-                .unwrap();
-            assert!(
-                before > 7.0 && after < 3.0,
-                "IMU{k} v{ch}: {before} → {after}"
-            );
-        }
-    }
+    assert_inflation_falls(&plain, &lagged, 3.0);
 }
 
 /// The OTSUKF with the attitude aiding 0.2 s late, unknown to it (every
@@ -240,33 +231,7 @@ fn ukf_fuses_each_aiding_source_at_its_own_latency() {
 #[test]
 fn otsukf_estimates_and_compensates_a_late_attitude() {
     let att = late_attitude(0.2);
-    let run = |extra: &[&str]| -> serde_json::Value {
-        let out = bin()
-            .arg("replay")
-            .arg(data("ap_log171_3imu.csv"))
-            .arg("--gnss")
-            .arg(data("ap_log171_gps_vel_ned.csv"))
-            .arg("--att")
-            .arg(&att)
-            .args([
-                "--from",
-                "80",
-                "--to",
-                "235",
-                "--json",
-                "--monitor",
-                "otsukf",
-            ])
-            .args(extra)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        serde_json::from_slice(&out.stdout).unwrap()
-    };
+    let run = |extra: &[&str]| replay_late(&att, &[&["--monitor", "otsukf"], extra].concat());
     let fused_on_arrival = run(&[]);
     assert!(
         events(&fused_on_arrival).iter().sum::<u64>() >= 10,

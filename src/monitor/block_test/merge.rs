@@ -114,9 +114,11 @@ pub(in crate::monitor) fn withhold_coupled_flags<T: Real>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use ChannelState::{FaultNegative, FaultPositive, Healthy, NotMonitored};
+    use ChannelState::{
+        FaultNegative as Neg, FaultPositive as Pos, Healthy as Ok, NotMonitored as Nm,
+    };
 
-    /// A gyro test that saw `ratio` and raised `flag` at its last decision.
+    /// A test that saw `ratio` and raised `flag` at its last decision.
     fn test_with(ratio: [f64; 3], flag: [i8; 3]) -> BlockTest<f64> {
         let mut t = BlockTest::new(1e-4);
         t.detail.ratio = ratio;
@@ -124,68 +126,41 @@ mod tests {
         t
     }
 
+    /// `withhold_coupled_flags` on a copy of `status`: what it returned and
+    /// the status after.
+    fn run(
+        status: [ChannelState; 6],
+        first: usize,
+        t: &mut BlockTest<f64>,
+        elsewhere: bool,
+    ) -> (bool, [ChannelState; 6]) {
+        let mut s = status;
+        let mut est = ImuVec::<f64>::repeat(0.1);
+        let w = withhold_coupled_flags(&mut s, &mut est, first, t, elsewhere);
+        for ((before, after), e) in status.iter().zip(s.iter()).zip(est.iter()) {
+            // A withheld channel carries no estimate; the others keep theirs.
+            let withheld = matches!(before, Pos | Neg) && *after == Nm;
+            assert_eq!(*e == 0.0, withheld, "{status:?} → {s:?}");
+        }
+        (w, s)
+    }
+
+    /// The filter flags g_y and g_z.
+    const YZ: [ChannelState; 6] = [Ok, Ok, Ok, Ok, Neg, Pos];
+
     #[test]
     fn a_flag_the_test_contradicts_while_it_sees_another_axis_is_withheld() {
-        let mut status = [
-            Healthy,
-            Healthy,
-            Healthy,
-            Healthy,
-            FaultNegative,
-            FaultPositive,
-        ];
-        let mut est = ImuVec::<f64>::from_column_slice(&[0.0, 0.0, 0.0, 0.0, -0.07, 0.2]);
         // g_z above threshold (not yet confirmed), g_y well below it.
         let mut t = test_with([0.05, 0.2, 4.8], [0, 0, 0]);
-        assert!(withhold_coupled_flags(
-            &mut status,
-            &mut est,
-            3,
-            &mut t,
-            false
-        ));
-        assert_eq!(
-            status,
-            [
-                Healthy,
-                Healthy,
-                Healthy,
-                Healthy,
-                NotMonitored,
-                FaultPositive
-            ]
-        );
-        assert_eq!(est[4], 0.0);
-        assert_eq!(est[5], 0.2);
+        assert_eq!(run(YZ, 3, &mut t, false), (true, [Ok, Ok, Ok, Ok, Nm, Pos]));
         // The accelerometer triad is another test's.
-        let mut acc = [
-            FaultPositive,
-            FaultPositive,
-            Healthy,
-            Healthy,
-            Healthy,
-            Healthy,
-        ];
-        assert!(!withhold_coupled_flags(
-            &mut acc,
-            &mut est,
-            0,
-            &mut test_with([0.1, 0.1, 0.1], [0; 3]),
-            false
-        ));
-        assert_eq!(acc[0], FaultPositive);
+        let acc = [Pos, Pos, Ok, Ok, Ok, Ok];
+        let mut quiet = test_with([0.1, 0.1, 0.1], [0; 3]);
+        assert_eq!(run(acc, 0, &mut quiet, false), (false, acc));
     }
 
     #[test]
     fn flags_stand_when_the_test_sees_nothing_cannot_judge_or_agrees() {
-        let flagged = [
-            Healthy,
-            Healthy,
-            Healthy,
-            Healthy,
-            FaultNegative,
-            FaultPositive,
-        ];
         let cases = [
             // Sees no fault anywhere: the filter alone detects.
             ([0.1, 0.2, 0.9], [0, 0, 0]),
@@ -197,150 +172,44 @@ mod tests {
             ([0.1, 0.5, 3.0], [0, -1, 0]),
         ];
         for (ratio, flag) in cases {
-            let mut status = flagged;
-            let mut est = ImuVec::<f64>::zeros();
             let mut t = test_with(ratio, flag);
-            assert!(
-                !withhold_coupled_flags(&mut status, &mut est, 3, &mut t, false),
-                "{ratio:?}"
-            );
-            assert_eq!(status, flagged, "{ratio:?} {flag:?}");
+            assert_eq!(run(YZ, 3, &mut t, false), (false, YZ), "{ratio:?} {flag:?}");
         }
         // Its flag on another axis is enough evidence of a fault there.
-        let mut status = flagged;
-        let mut est = ImuVec::<f64>::zeros();
         let mut t = test_with([0.9, 0.3, 0.5], [1, 0, 0]);
-        assert!(withhold_coupled_flags(
-            &mut status,
-            &mut est,
-            3,
-            &mut t,
-            false
-        ));
-        assert_eq!(status[4], NotMonitored);
-        assert_eq!(status[5], NotMonitored);
+        assert_eq!(run(YZ, 3, &mut t, false), (true, [Ok, Ok, Ok, Ok, Nm, Nm]));
     }
 
     #[test]
     fn a_fault_seen_during_a_flag_still_standing_keeps_withholding() {
-        let both = [
-            Healthy,
-            Healthy,
-            Healthy,
-            Healthy,
-            FaultNegative,
-            FaultPositive,
-        ];
-        let mut est = ImuVec::<f64>::zeros();
         let mut t = test_with([0.1, 0.2, 4.8], [0, 0, 0]);
-        let mut status = both;
-        assert!(withhold_coupled_flags(
-            &mut status,
-            &mut est,
-            3,
-            &mut t,
-            false
-        ));
+        assert!(run(YZ, 3, &mut t, false).0);
         // The windows no longer hold the fault, the filter still flags g_z.
         t.detail.ratio = [0.1, 0.2, 0.7];
-        let mut status = both;
-        assert!(withhold_coupled_flags(
-            &mut status,
-            &mut est,
-            3,
-            &mut t,
-            false
-        ));
-        assert_eq!(status[4], NotMonitored);
+        assert_eq!(run(YZ, 3, &mut t, false), (true, [Ok, Ok, Ok, Ok, Nm, Pos]));
         // g_z's flag ended: a later flag on g_y alone is the filter's own.
-        let mut status = [Healthy, Healthy, Healthy, Healthy, Healthy, Healthy];
-        assert!(!withhold_coupled_flags(
-            &mut status,
-            &mut est,
-            3,
-            &mut t,
-            false
-        ));
-        let mut status = both;
-        assert!(!withhold_coupled_flags(
-            &mut status,
-            &mut est,
-            3,
-            &mut t,
-            false
-        ));
-        assert_eq!(status, both);
+        assert!(!run([Ok; 6], 3, &mut t, false).0);
+        assert_eq!(run(YZ, 3, &mut t, false), (false, YZ));
     }
 
     #[test]
     fn a_fault_the_other_triads_test_sees_withholds_what_this_test_contradicts() {
-        // Accelerometer flags the velocity test judges healthy, a gyro
-        // fault seen by the gyro test (`elsewhere`).
-        let mut status = [
-            FaultPositive,
-            Healthy,
-            FaultNegative,
-            FaultPositive,
-            Healthy,
-            Healthy,
-        ];
-        let mut est = ImuVec::<f64>::from_column_slice(&[1.0, 0.0, -1.0, 0.5, 0.0, 0.0]);
+        // Accelerometer flags the velocity test judges healthy but a_z; a
+        // gyro fault seen by the gyro test (`elsewhere`).
+        let flags = [Pos, Ok, Neg, Pos, Ok, Ok];
         let mut vel = test_with([0.3, 0.2, 1.5], [0, 0, 0]);
-        assert!(withhold_coupled_flags(
-            &mut status,
-            &mut est,
-            0,
-            &mut vel,
-            true
-        ));
-        // a_z is above the velocity test's threshold: its flag stands.
         assert_eq!(
-            status,
-            [
-                NotMonitored,
-                Healthy,
-                FaultNegative,
-                FaultPositive,
-                Healthy,
-                Healthy
-            ]
+            run(flags, 0, &mut vel, true),
+            (true, [Nm, Ok, Neg, Pos, Ok, Ok])
         );
-        assert_eq!(est[0], 0.0);
         // Without a fault elsewhere, a_z seen by this test still withholds a_x.
-        let mut status = [
-            FaultPositive,
-            Healthy,
-            FaultNegative,
-            Healthy,
-            Healthy,
-            Healthy,
-        ];
-        assert!(withhold_coupled_flags(
-            &mut status,
-            &mut est,
-            0,
-            &mut vel,
-            false
-        ));
-        assert_eq!(status[0], NotMonitored);
+        assert_eq!(
+            run(flags, 0, &mut vel, false),
+            (true, [Nm, Ok, Neg, Pos, Ok, Ok])
+        );
         // Nothing seen anywhere: both stand.
         let mut quiet = test_with([0.3, 0.2, 0.4], [0, 0, 0]);
-        let mut status = [
-            FaultPositive,
-            Healthy,
-            FaultNegative,
-            Healthy,
-            Healthy,
-            Healthy,
-        ];
-        assert!(!withhold_coupled_flags(
-            &mut status,
-            &mut est,
-            0,
-            &mut quiet,
-            false
-        ));
-        assert_eq!(status[0], FaultPositive);
+        assert_eq!(run(flags, 0, &mut quiet, false), (false, flags));
         assert!(!quiet.sees_fault());
         assert!(vel.sees_fault());
     }
