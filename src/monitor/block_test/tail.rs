@@ -129,7 +129,7 @@ mod tests {
         let mix = learnt(
             || {
                 k += 1;
-                n.gauss() * if k % 2 == 0 { 1.0 } else { 3.0 }
+                n.gauss() * if k.is_multiple_of(2) { 1.0 } else { 3.0 }
             },
             20_000,
         );
