@@ -215,17 +215,15 @@ fn otsukf_estimates_and_compensates_a_late_attitude() {
 /// gyro/attitude-aiding test (on in the flight profile) adds none (its
 /// IMU1 g_y event at 147–152 s, after a minute of 60–100 °/s manoeuvres,
 /// went with the block variance's regression on motion); the
-/// accelerometer/GNSS-velocity test (on too) none at lag 0, 2/1/1 with
-/// the GPS lag fitted (1/1/1 before the threshold's kurtosis widening,
-/// `block_test/tail.rs`: IMU0 a_x from 148.0 s is new); the UKF's own test none (it made
+/// accelerometer/GNSS-velocity test (on too) none at lag 0, one event
+/// per IMU with the GPS lag fitted; the UKF's own test none (it made
 /// 1/7/1 with the inflation frozen at the end of learning). The OTSUKF:
 /// none with the lag compensated in the filter (its flight default; one
 /// per IMU, a_y at 145 s in the hardest turn, before its accelerometer
 /// decision waited for the GNSS acceleration to be learnt,
 /// `aiding_cover.rs`), 7/7/7 with the GPS velocity fused on arrival
-/// (`--velocity-lag 0`; 10/11/10 before), 2/1/1 on rows re-timed by
-/// the fitted lag (two per IMU before; 1/1/1 before the kurtosis
-/// widening).
+/// (`--velocity-lag 0`; 10/11/10 before), one per IMU on rows re-timed by
+/// the fitted lag (two before).
 #[test]
 fn fault_free_flag_events_per_imu() {
     let ukf = ["--monitor", "ukf"];
@@ -237,7 +235,7 @@ fn fault_free_flag_events_per_imu() {
             &[&ukf[..], &["--velocity-increment", "off"]].concat(),
             [0, 0, 0],
         ),
-        (&auto, [2, 1, 1]),
+        (&auto, [1, 1, 1]),
         (
             &[&auto[..], &["--velocity-increment", "off"]].concat(),
             [0, 0, 0],
@@ -254,7 +252,7 @@ fn fault_free_flag_events_per_imu() {
         (&["--monitor", "otsukf", "--velocity-lag", "0"], [7, 7, 7]),
         (
             &["--monitor", "otsukf", "--velocity-delay", "auto"],
-            [2, 1, 1],
+            [1, 1, 1],
         ),
     ];
     for (args, want) in cases {
@@ -271,11 +269,10 @@ fn fault_free_flag_events_per_imu() {
 /// and not judging a window more active than anything learnt
 /// (`inflation_cover.rs`), the UKF's own test raises none; the block tests
 /// none either since that gap is not learnt (2/1/3 before). From 70 s:
-/// 3/0/0 frozen (3/0/1 before the kurtosis widening; 4/0/2 before the turn-on bound, whose gyro bound the
+/// 3/0/1 frozen (4/0/2 before the turn-on bound, whose gyro bound the
 /// learner meets at take-off; 4/0/1 before a gyro flag's attitude error
 /// stopped flagging the accelerometers, `velocity_tainted`: IMU0 a_x
-/// 234.1–234.9 s after g_z 233.7–234.1 s), 0/0/0 followed (1/0/1 before
-/// the threshold's kurtosis widening, `block_test/tail.rs`).
+/// 234.1–234.9 s after g_z 233.7–234.1 s), 1/0/1 followed.
 #[test]
 fn replay_from_the_ground_learns_flight_before_judging_it() {
     let ukf = ["--monitor", "ukf"];
@@ -289,8 +286,8 @@ fn replay_from_the_ground_learns_flight_before_judging_it() {
             [&ukf[..], &own[..], &frozen[..]].concat(),
             [42, 32, 49],
         ),
-        ("70", ukf.to_vec(), [0, 0, 0]),
-        ("70", [&ukf[..], &frozen[..]].concat(), [3, 0, 0]),
+        ("70", ukf.to_vec(), [1, 0, 1]),
+        ("70", [&ukf[..], &frozen[..]].concat(), [3, 0, 1]),
     ];
     for (from, args, want) in cases {
         assert_eq!(events(&replay_from(from, &args)), want, "{from} {args:?}");

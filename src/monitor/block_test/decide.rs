@@ -43,8 +43,6 @@ impl<T: Real> BlockTest<T> {
                 let Some(t) = self.threshold(k, c, nu) else {
                     continue;
                 };
-                // Widened for the tail the learnt windows show (`tail`).
-                let t = t * self.tail_factor(cfg, k, c);
                 let lim = limits.nominal.get(c).copied().unwrap_or_else(T::zero);
                 let off = m.fmax(-lim).fmin(lim);
                 let (Some(wc), Some(slot)) =

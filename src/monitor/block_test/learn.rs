@@ -101,17 +101,12 @@ impl<T: Real> BlockTest<T> {
             for (f, len) in factors.iter_mut().zip(cfg.lengths.iter()) {
                 *f = self.window_factor(c, age, usize::from(*len), longest);
             }
-            let settled = self
-                .n_b
-                .get(c)
-                .is_some_and(|n| *n >= T::lit(2.0 * longest as f64));
-            for (k, (((q, nw), w), h)) in self
+            for (((q, nw), w), h) in self
                 .q_w
                 .iter_mut()
                 .zip(self.n_w.iter_mut())
                 .zip(windows.iter())
                 .zip(factors.iter())
-                .enumerate()
             {
                 let (Some(q), Some(nw), Some(wc)) = (
                     q.get_mut(c),
@@ -121,14 +116,8 @@ impl<T: Real> BlockTest<T> {
                     continue;
                 };
                 let d = *wc - mean;
-                let e = d * d / h.fmax(T::lit(1e-6));
-                *q = *q * keep + e;
+                *q = *q * keep + d * d / h.fmax(T::lit(1e-6));
                 *nw = *nw * keep + T::one();
-                if settled {
-                    if let Some(t) = self.tail.get_mut(k) {
-                        t.learn(c, e, keep);
-                    }
-                }
             }
         }
         // The motion the learnt spread holds for: the block counts if any

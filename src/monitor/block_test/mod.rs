@@ -28,11 +28,8 @@
 //! than straight flight's on log171), and the
 //! threshold the Student-t quantile of the per-decision probability
 //! [`AttitudeRateConfig::alpha`] at the degrees of freedom
-//! `prior_windows + 1.5·n_L/L` actually learnt, widened by the
-//! Cornish–Fisher expansion for the excess kurtosis the learnt windows
-//! show (`tail`: log171's window deviations have a heavier tail than a
-//! Gaussian's): the false-alarm rate follows from the data and the design
-//! rate, not from a margin. A length
+//! `prior_windows + 1.5·n_L/L` actually learnt: the false-alarm rate
+//! follows from the data and the design rate, not from a margin. A length
 //! judges once it has `min_dof` degrees of freedom and the offset two
 //! longest windows of blocks.
 //!
@@ -78,7 +75,7 @@ use crate::monitor::{
     BlockTestConfig, BlockTestDetail, ChannelState, ATTITUDE_RATE_LENGTHS as NL,
     ATTITUDE_RATE_MAX_BLOCKS,
 };
-use crate::stats::{normal_upper_quantile, student_t_upper_quantile};
+use crate::stats::student_t_upper_quantile;
 
 mod decide;
 mod learn;
@@ -86,7 +83,6 @@ mod merge;
 mod motion_variance;
 #[cfg(test)]
 mod motion_variance_tests;
-mod tail;
 #[cfg(test)]
 pub(super) mod test_noise;
 pub(super) use merge::merge_block_flags;
@@ -226,11 +222,6 @@ pub(super) struct BlockTest<T> {
     /// and their count.
     q_w: [Vector3<T>; NL],
     n_w: [Vector3<T>; NL],
-    /// Per length: the tail of the window deviations (`tail`).
-    tail: [tail::TailSums<T>; NL],
-    /// The normal quantile of the design per-decision probability (the
-    /// Cornish–Fisher widening's `z`, `tail`).
-    z_design: T,
     /// Per channel: the learnt sums `Σ1, Σm, Σm², Σd², Σd²m` of the block
     /// variance's regression on motion (`motion_variance`).
     motion_var: [Vector3<T>; 5],
@@ -280,8 +271,6 @@ impl<T: Real> BlockTest<T> {
             prev: [None; 3],
             q_w: [Vector3::zeros(); NL],
             n_w: [Vector3::zeros(); NL],
-            tail: [tail::TailSums::default(); NL],
-            z_design: T::lit(normal_upper_quantile(alpha * 0.5).unwrap_or(0.0)),
             motion_var: [Vector3::zeros(); 5],
             quantile: [[(T::zero(), T::zero()); 3]; NL],
             judging: false,
