@@ -364,48 +364,33 @@ pub(crate) fn run(args: Args) -> Result<()> {
         );
     }
     if !s.aiding_delay_s.is_empty() {
-        let list = |v: &[f64], f: &dyn Fn(f64) -> String| {
-            v.iter().map(|x| f(*x)).collect::<Vec<_>>().join(", ")
-        };
         note!(
             "  aiding delay ({}): {} s; heading offset ({}): {}°",
             s.aiding_delay_mode.as_deref().unwrap_or("fixed"),
-            list(&s.aiding_delay_s, &|x| format!("{x:.3}")),
+            joined(&s.aiding_delay_s, 3),
             if s.heading_offset_estimated {
                 "estimated"
             } else {
                 "off"
             },
-            list(&s.heading_offset_deg, &|x| format!("{x:.2}"))
+            joined(&s.heading_offset_deg, 2)
         );
     }
     note!(
         "  velocity aiding delay ({}): {} s",
         s.velocity_delay_mode,
-        s.velocity_delay_s
-            .iter()
-            .map(|x| format!("{x:.3}"))
-            .collect::<Vec<_>>()
-            .join(", ")
+        joined(&s.velocity_delay_s, 3)
     );
     if !s.ukf_velocity_lag_s.is_empty() {
         note!(
             "  UKF velocity lag compensated: {} s",
-            s.ukf_velocity_lag_s
-                .iter()
-                .map(|x| format!("{x:.3}"))
-                .collect::<Vec<_>>()
-                .join(", ")
+            joined(&s.ukf_velocity_lag_s, 3)
         );
     }
     if !s.otsukf_velocity_lag_s.is_empty() {
         note!(
             "  OTSUKF velocity lag compensated: {} s",
-            s.otsukf_velocity_lag_s
-                .iter()
-                .map(|x| format!("{x:.3}"))
-                .collect::<Vec<_>>()
-                .join(", ")
+            joined(&s.otsukf_velocity_lag_s, 3)
         );
     }
     if let Some(p) = out {
@@ -459,4 +444,13 @@ impl From<ProfileArg> for imu_fdi_cli::eval::replay::Profile {
 /// extract that `convert` maps.
 pub(crate) fn has_time_column(path: &std::path::Path) -> bool {
     imu_fdi_cli::io::log_import::open_csv(path).map_or(true, |(_, h)| h.iter().any(|c| c == "t"))
+}
+
+/// The values, `decimals` after the point, comma-separated (the text
+/// summary's per-IMU lists).
+fn joined(v: &[f64], decimals: usize) -> String {
+    v.iter()
+        .map(|x| format!("{x:.decimals$}"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
