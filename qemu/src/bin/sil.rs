@@ -140,8 +140,9 @@ struct Run {
 /// Constructs the run's state into static RAM, each part in a frame of its
 /// own that is popped before the next part and before the steps: inlined
 /// into `main`, the construction's temporaries (the configuration, the
-/// monitor's fields being assembled, the scenario, the simulator) stayed
-/// in `main`'s frame under every step (8.7 KB of an 11.96 KB peak, issue 17).
+/// monitor's fields being assembled) stayed in `main`'s frame under every
+/// step (that frame was 8.7 KB of an 11.96 KB peak; docs/performance.md,
+/// Stack).
 #[inline(never)]
 fn setup() -> Option<Run> {
     let scn = new_scenario()?;
@@ -227,7 +228,7 @@ fn steps(run: Run, setup_stack: u32) -> ! {
     let overhead = overhead();
     let (mut all, mut predict_only, mut with_update) =
         (Cost::default(), Cost::default(), Cost::default());
-    // Deepest stack use below `main`'s frame: of the monitor steps, and of
+    // Deepest stack use below this frame: of the monitor steps, and of
     // everything else (simulator, tally) between them.
     let (mut step_stack, mut other_stack) = (0u32, 0u32);
     let mut sp = 0usize;
