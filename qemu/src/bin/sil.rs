@@ -152,7 +152,7 @@ fn setup() -> Option<Run> {
     })
 }
 
-/// Scenario S2, in static RAM (see [`setup`], [`chip_setup`]).
+/// Scenario S2, in static RAM (see `setup` and `chip_setup`, whichever the image has).
 #[inline(never)]
 fn new_scenario() -> Option<&'static Scenario> {
     Some(cortex_m::singleton!(: Scenario = Scenario::s2())?)
@@ -185,13 +185,13 @@ fn new_monitor(scn: &Scenario) -> Option<&'static mut imu_fdi::monitor::UkfMonit
     }
 }
 
-/// The seed-1 simulator of `scn`, in static RAM (see [`setup`], [`chip_setup`]).
+/// The seed-1 simulator of `scn`, in static RAM (see `setup` and `chip_setup`, whichever the image has).
 #[inline(never)]
 fn new_simulator(scn: &Scenario) -> Option<&'static mut hal_sim::Simulator> {
     cortex_m::singleton!(: hal_sim::Simulator = hal_sim::Simulator::new(scn, 1))
 }
 
-/// The detection tally of `scn`, in static RAM (see [`setup`], [`chip_setup`]).
+/// The detection tally of `scn`, in static RAM (see `setup` and `chip_setup`, whichever the image has).
 #[inline(never)]
 fn new_tally(scn: &Scenario) -> Option<&'static mut hal_sim::setup::DetectionTally> {
     cortex_m::singleton!(: hal_sim::setup::DetectionTally = hal_sim::setup::DetectionTally::new(scn))
@@ -350,7 +350,7 @@ struct ChipRun {
 #[cfg(feature = "sil-chip")]
 /// Constructs the chip-path run's state into static RAM, each part in a
 /// frame of its own popped before the next part and before the steps (as
-/// [`setup`] in the monitor image).
+/// `setup` in the monitor image).
 #[inline(never)]
 fn chip_setup() -> Option<ChipRun> {
     let scn = new_scenario()?;
