@@ -22,7 +22,9 @@ function k(n) { return sprintf("%d k", (n + 500) / 1000) }
   print "| parity step (cone6, white-noise tests), mean / max; configuration | " num(v["parity_step_mean"]) " / " num(v["parity_step_max"]) "; " k(v["parity_config"]) " | ≈ 60 per sample (+ block and reconfiguration work) | max ≤ 20,000; ≤ 500 k |"
   print "| parity step (3 triads, multi-scale tests), mean / max; configuration | " num(v["parity_flight_step_mean"]) " / " num(v["parity_flight_step_max"]) "; " k(v["parity_flight_config"]) " | ≈ 120 per sample (+ block work) | as above |"
   print "| parity step (3 triads), 1-s glitch isolated then re-admitted: the re-admitting step; the flight max | " num(v["parity_readmit_step"]) "; " num(v["parity_readmit_flight_step_max"]) " | | ≤ 20,000 |"
-  print "| peak stack: SIL image (includes the simulator) / the monitor steps alone | " num(v["stack_peak_bytes"]) " / " num(v["monitor_stack_bytes"]) " | | ≤ 12,288 |"
+  # chip_stack_peak_bytes: in the line since branch stack2; older lines lack it.
+  chip = ("chip_stack_peak_bytes" in v) ? "; " num(v["chip_stack_peak_bytes"]) : ""
+  print "| peak stack: SIL image (includes the simulator) / the monitor steps alone; chip-path SIL image (driver, emulated chip, Monitor task) | " num(v["stack_peak_bytes"]) " / " num(v["monitor_stack_bytes"]) chip " | | ≤ 12,288 |"
   print "| firmware flash / of which imu_fdi; SIL image | " num(v["firmware_flash_bytes"]) " / " num(v["imu_fdi_flash_bytes"]) "; " num(v["sil_flash_bytes"]) " | | ≤ 98,304 / ≤ 49,152; ≤ 131,072 |"
   print "| `kfilter` 0.5 UKF predict + update, same model (M2); monitor mean ÷ it; imu-fdi `Ukf` predict + update ÷ it | " num(v["kfilter_step_mean"]) "; " v["kfilter_ratio"] "; " v["kfilter_filter_ratio"] " | ≈ 4,500 (kfilter), ≈ 3,000 (`Ukf`) | ratio ≤ 0.24 |"
 }'

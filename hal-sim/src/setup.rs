@@ -175,35 +175,55 @@ pub fn chip_config() -> imu_fdi::imu::icm42688::Config {
     }
 }
 
-/// Scenario `scn` (seed `seed`) through the real ICM-42688-P driver reading
-/// hal-sim's register-level emulated chip, into the periodic
-/// [`MonitorTask`](imu_fdi::monitor::MonitorTask) — the firmware's data path,
-/// shared by the host CLI (`detections --via-chip`) and the QEMU image so
-/// both run the same code. `timed` is handed each `task.step` call to run
-/// (the QEMU image counts its instructions). Returns the tally, or `None` if the
-/// driver or the monitor refused to start.
-pub fn run_via_chip(
+/// The Monitor task of the chip-in-the-loop runs: the ICM-42688-P driver
+/// on the emulated chip's shared bus, into the UKF monitor.
+pub type ChipTask<'a> = imu_fdi::monitor::MonitorTask<
+    imu_fdi::imu::icm42688::Icm42688<crate::emulated_icm42688::SharedBus<'a>>,
+>;
+
+/// The emulated chip needs no waiting between the driver's set-up writes.
+struct NoDelay;
+
+impl embedded_hal::delay::DelayNs for NoDelay {
+    fn delay_ns(&mut self, _ns: u32) {}
+}
+
+/// The driver started on `chip` ([`chip_config`]) and the Monitor task
+/// configured for `scn` ([`monitor_config`], default options), or `None`
+/// if the driver or the monitor refused to start. A part of
+/// [`run_via_chip`] of its own so that an image can construct the task
+/// where it keeps it (the QEMU image: static RAM) instead of in the run's
+/// frame.
+pub fn chip_task<'a>(
+    chip: &'a core::cell::RefCell<crate::emulated_icm42688::EmulatedIcm42688>,
     scn: &Scenario,
-    seed: u64,
-    mut timed: impl FnMut(&mut dyn FnMut()),
-) -> Option<DetectionTally> {
-    use core::cell::RefCell;
+) -> Option<ChipTask<'a>> {
     use imu_fdi::imu::icm42688::Icm42688;
-    use imu_fdi::model::{MeasVec, Measurement};
-    use imu_fdi::monitor::MonitorTask;
 
-    use crate::emulated_icm42688::{EmulatedIcm42688, SharedBus};
+    let imu = Icm42688::new(
+        crate::emulated_icm42688::SharedBus(chip),
+        chip_config(),
+        &mut NoDelay,
+    )
+    .ok()?;
+    ChipTask::new(imu, monitor_config(scn, &RunOptions::default())).ok()
+}
 
-    struct NoDelay;
-    impl embedded_hal::delay::DelayNs for NoDelay {
-        fn delay_ns(&mut self, _ns: u32) {}
-    }
+/// The steps of [`run_via_chip`]: each sample of `sim` presented by `chip`,
+/// read by `task`'s driver and monitored, the task's verdict recorded in
+/// `tally`. `timed` is handed each `task.step` call to run (the QEMU image
+/// counts its instructions). The parts are passed in, not owned, so that
+/// their storage is the caller's choice.
+pub fn chip_steps(
+    sim: impl Iterator<Item = SimSample>,
+    chip: &core::cell::RefCell<crate::emulated_icm42688::EmulatedIcm42688>,
+    task: &mut ChipTask<'_>,
+    tally: &mut DetectionTally,
+    mut timed: impl FnMut(&mut dyn FnMut()),
+) {
+    use imu_fdi::model::Measurement;
 
-    let chip = RefCell::new(EmulatedIcm42688::new());
-    let imu = Icm42688::new(SharedBus(&chip), chip_config(), &mut NoDelay).ok()?;
-    let mut task = MonitorTask::<_>::new(imu, monitor_config(scn, &RunOptions::default())).ok()?;
-    let mut tally = DetectionTally::new(scn);
-    for s in crate::sim::Simulator::new(scn, seed) {
+    for s in sim {
         if let Some(v) = s.imu {
             chip.borrow_mut()
                 .set_sample([v[0], v[1], v[2]], [v[3], v[4], v[5]], 25.0);
@@ -218,5 +238,31 @@ pub fn run_via_chip(
             tally.record_status(&s, &r.status);
         }
     }
+}
+
+/// Scenario `scn` (seed `seed`) through the real ICM-42688-P driver reading
+/// hal-sim's register-level emulated chip, into the periodic
+/// [`MonitorTask`](imu_fdi::monitor::MonitorTask) — the firmware's data path,
+/// shared by the host CLI (`detections --via-chip`) and the QEMU image so
+/// both run the same code ([`chip_task`], then [`chip_steps`]; the QEMU
+/// image calls the two itself, with its parts in static RAM). `timed` is
+/// handed each `task.step` call to run (the QEMU image counts its
+/// instructions). Returns the tally, or `None` if the driver or the monitor
+/// refused to start.
+pub fn run_via_chip(
+    scn: &Scenario,
+    seed: u64,
+    timed: impl FnMut(&mut dyn FnMut()),
+) -> Option<DetectionTally> {
+    let chip = core::cell::RefCell::new(crate::emulated_icm42688::EmulatedIcm42688::new());
+    let mut task = chip_task(&chip, scn)?;
+    let mut tally = DetectionTally::new(scn);
+    chip_steps(
+        crate::sim::Simulator::new(scn, seed),
+        &chip,
+        &mut task,
+        &mut tally,
+        timed,
+    );
     Some(tally)
 }
