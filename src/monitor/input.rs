@@ -24,6 +24,24 @@ pub(crate) fn in_range<T: Real>(imu: &ImuVec<T>, full_scale: &ImuVec<T>) -> bool
         .all(|(v, fs)| v.finite() && v.abs() <= *fs * T::lit(RANGE_FACTOR))
 }
 
+/// The sample that stands in for an unusable one: each channel that is
+/// finite and within range as read, the others from `last` (the last good
+/// sample). One bad cell (a NaN written by a logger, a corrupted register)
+/// then leaves the five other channels real.
+pub(crate) fn stand_in<T: Real>(
+    imu: &ImuVec<T>,
+    last: &ImuVec<T>,
+    full_scale: &ImuVec<T>,
+) -> ImuVec<T> {
+    let mut out = *last;
+    for ((o, v), fs) in out.iter_mut().zip(imu.iter()).zip(full_scale.iter()) {
+        if v.finite() && v.abs() <= *fs * T::lit(RANGE_FACTOR) {
+            *o = *v;
+        }
+    }
+    out
+}
+
 /// True when any channel is at or beyond 98 % of its full scale.
 pub(crate) fn saturated<T: Real>(imu: &ImuVec<T>, full_scale: &ImuVec<T>) -> bool {
     imu.iter()
@@ -95,6 +113,14 @@ impl<T: Real> ImuGap<T> {
         let gap = self.missed > period * T::lit(MAX_PERIOD_FACTOR);
         self.missed = T::zero();
         gap
+    }
+
+    /// The run of unusable samples under way (if any) is still short
+    /// enough to bridge with the last good sample: at most five nominal
+    /// `period`s missed, beyond which [`back_after_gap`](Self::back_after_gap)
+    /// reports a gap when the IMU is back.
+    pub(crate) fn bridgeable(&self, period: T) -> bool {
+        self.missed <= period * T::lit(MAX_PERIOD_FACTOR)
     }
 }
 

@@ -67,6 +67,28 @@ fn to_ned(att: [f64; 3], f: [f64; 3]) -> [f64; 3] {
     ]
 }
 
+/// The IMU rows with each non-finite cell replaced by its channel's last
+/// finite value (0 before the first), as the monitors bridge a bad sample
+/// (`input::stand_in`): the lag fits integrate the samples, and one NaN
+/// cell made every later integral NaN — on log171 one in IMU1's learning
+/// span set the OTSUKF's GPS lag to 0 instead of 0.22 s, and 6 flag
+/// events followed.
+pub fn bridge_bad_cells(rows: impl IntoIterator<Item = [f64; 6]>) -> Vec<[f64; 6]> {
+    let mut last = [0.0f64; 6];
+    rows.into_iter()
+        .map(|mut s| {
+            for (v, l) in s.iter_mut().zip(last.iter_mut()) {
+                if v.is_finite() {
+                    *l = *v;
+                } else {
+                    *v = *l;
+                }
+            }
+            s
+        })
+        .collect()
+}
+
 /// The GNSS lag in IMU rows (0 ..= `max_rows`) on rows `t` (s), `imu`
 /// (`[a_x, a_y, a_z, p, q, r]`), `vel` (GNSS velocity NED, where present)
 /// and `att` (roll, pitch, yaw, rad, where present; held between samples).

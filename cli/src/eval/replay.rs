@@ -120,10 +120,10 @@ pub fn replay_observed(
             ok.then(|| core::array::from_fn(|i| r.z.get(o + i).copied().unwrap_or(0.0)))
         };
         let times: Vec<f64> = head.iter().map(|r| r.t).collect();
-        let imu: Vec<[f64; 6]> = head
-            .iter()
-            .map(|r| r.imus.get(k).copied().unwrap_or([f64::NAN; 6]))
-            .collect();
+        let imu = super::gnss_lag::bridge_bad_cells(
+            head.iter()
+                .map(|r| r.imus.get(k).copied().unwrap_or([f64::NAN; 6])),
+        );
         let mut att: Vec<Option<[f64; 3]>> = head.iter().map(|r| avail3(r, 3)).collect();
         // The OTSUKF's attitude latency (`--aiding-delay`): the attitude
         // rows moved back by it, so the velocity fit rotates the specific

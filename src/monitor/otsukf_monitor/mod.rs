@@ -6,8 +6,8 @@ use nalgebra::Vector3;
 
 use super::align::align_state;
 use super::input::{
-    check_period, in_range, lever_arm_rates, next_phase, saturated, usable_aiding, FrozenCheck,
-    ImuGap, Period,
+    check_period, in_range, lever_arm_rates, next_phase, saturated, stand_in, usable_aiding,
+    FrozenCheck, ImuGap, Period,
 };
 use super::realign::AidingTrack;
 use super::stale_aiding::{screened_aiding, RepeatedAiding};
@@ -201,9 +201,6 @@ impl<T: Real> OtsukfMonitor<T> {
         // Aiding outside its physical range, or repeating itself, is never used.
         let aiding = &screened_aiding(aiding, b.max_aiding_speed, &mut self.repeated, &mut health);
         let usable = in_range && !health.frozen;
-        if !usable || health.saturated {
-            self.holdoff = self.holdoff.max(T::lit(INPUT_HOLDOFF_S));
-        }
         let bridged = if dt_ok { Some(dt) } else { None };
         if cfg!(feature = "imu-gap-recovery")
             && self
@@ -212,10 +209,22 @@ impl<T: Real> OtsukfMonitor<T> {
         {
             self.hold_after_gap();
         }
+        // A short run of unusable samples is bridged with a stand-in, the
+        // statistics running on (the innovation monitor's reasons: `step`
+        // there); a longer one holds them.
+        let bridge =
+            !usable && cfg!(feature = "imu-gap-recovery") && self.imu_gap.bridgeable(b.imu_period);
+        if (!usable && !bridge) || health.saturated {
+            self.holdoff = self.holdoff.max(T::lit(INPUT_HOLDOFF_S));
+        }
         // Through an invalid or frozen sample the last good one stands in
         // (as in the innovation monitor): the state keeps moving with the
         // vehicle instead of freezing.
-        let u_meas = if usable { *imu } else { *self.frozen.last() };
+        let u_meas = if usable {
+            *imu
+        } else {
+            stand_in(imu, self.frozen.last(), &b.full_scale)
+        };
         let u_corr = u_meas - self.filter.fault();
         let omega = lever_arm_rates(usable, &u_corr);
         if self.phase == Phase::Aligning {
@@ -226,7 +235,11 @@ impl<T: Real> OtsukfMonitor<T> {
         let x_before = self.att_lag_before();
         let mut propagated = false;
         if dt_ok {
-            self.blocks_sample(imu, dt, usable);
+            if bridge {
+                self.blocks_sample(&u_meas, dt, true);
+            } else {
+                self.blocks_sample(imu, dt, usable);
+            }
             match self.predict(&u_corr, dt) {
                 Ok(reset) => {
                     health.covariance_reset |= reset;

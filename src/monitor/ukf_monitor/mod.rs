@@ -1,7 +1,7 @@
 use nalgebra::Vector3;
 
 use super::align::align_state;
-use super::input::{check_period, in_range, lever_arm_rates, saturated, ImuGap, Period};
+use super::input::{check_period, in_range, lever_arm_rates, saturated, stand_in, ImuGap, Period};
 use super::realign::NEVER_FUSED_S;
 use super::stale_aiding::{screened_aiding, RepeatedAiding};
 use super::{ConfigError, Health, Phase, UkfMonitorConfig, UkfReport};
@@ -440,11 +440,6 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
 
         // --- prediction ---------------------------------------------------
         let usable = in_range && !health.frozen;
-        if !usable {
-            // The filter dead-reckons on the last good sample (below); its
-            // innovations say nothing about the IMU until it has settled.
-            self.stats_holdoff = T::lit(0.5);
-        }
         if cfg!(feature = "imu-gap-recovery")
             && self
                 .imu_gap
@@ -452,13 +447,42 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         {
             self.hold_after_gap();
         }
+        // A short run of unusable samples (at most five periods, the gap
+        // recovery's bound) is bridged with a stand-in everywhere: the
+        // filter and the block tests integrate it as a sample, the
+        // statistics run on. Its error is a sample's noise over a period
+        // or two; holding the statistics for 0.5 s and dropping the block
+        // tests' interval, ring and open block at every bad sample left
+        // them without a complete window on log171 with one bad cell in 28
+        // rows (`scripts/single-imu-log-damage.py`: IMU1's accelerometer
+        // and g_z steps missed). A longer run holds the statistics while
+        // the filter dead-reckons on the last good sample (its innovations
+        // say nothing about the IMU until it has settled), and the gap
+        // recovery clears the windows when the IMU is back.
+        let bridge = !usable
+            && cfg!(feature = "imu-gap-recovery")
+            && self.imu_gap.bridgeable(self.cfg.imu_period);
+        if !usable && !bridge {
+            self.stats_holdoff = T::lit(0.5);
+        }
         if let Some(dt) = dt_use {
             // Through a dropout or an invalid/frozen sample, the last good
-            // sample stands in: better than freezing the state while the
-            // vehicle moves, which would flag every channel afterwards.
-            let u = if usable { *imu } else { self.prev_imu } - self.removed_bias();
-            self.att_rate_sample(imu, dt, usable);
-            self.vel_inc_sample(imu, dt, usable);
+            // sample stands in (channel by channel: `stand_in`): better
+            // than freezing the state while the vehicle moves, which would
+            // flag every channel afterwards.
+            let shown = if usable {
+                *imu
+            } else {
+                stand_in(imu, &self.prev_imu, &self.cfg.full_scale)
+            };
+            let u = shown - self.removed_bias();
+            let (sample, live) = if bridge {
+                (&shown, true)
+            } else {
+                (imu, usable)
+            };
+            self.att_rate_sample(sample, dt, live);
+            self.vel_inc_sample(sample, dt, live);
             match self.predict(&u, dt) {
                 Ok(reset) => health.covariance_reset |= reset,
                 Err(ModelError::PitchSingularity) => health.pitch_singular = true,
