@@ -19,7 +19,7 @@
 )] // test code
 
 mod common;
-use common::{bin, data, tmp};
+use common::{bin, data, step_faults, tmp};
 
 const CHANNELS: [&str; 6] = ["ax", "ay", "az", "gx", "gy", "gz"];
 
@@ -43,18 +43,11 @@ fn events(mon: &str, glitch: Option<(usize, f64, f64, f64)>) -> Vec<(String, f64
         let (acc, gyro) = if channel < 3 {
             (size, 0.0)
         } else {
-            (0.0, size.to_radians())
+            (0.0, size)
         };
-        let toml = csv.with_extension("toml");
-        std::fs::write(
-            &toml,
-            format!(
-                "[sizes]\naccel = [{acc}, 0.0, 0.0]\ngyro = [{gyro}, 0.0, 0.0]\n\
-                 f_unit = [1.0, 0.017453292519943295]\n[[faults]]\nchannel = {channel}\n\
-                 start = {start}\nend = {end}\nkind = \"E1\"\nsign = 1\n"
-            ),
-        )
-        .unwrap();
+        let name = csv.with_extension("toml");
+        let name = name.file_name().unwrap().to_str().unwrap();
+        let toml = step_faults(name, channel, start, end, acc, gyro);
         cmd.arg("--faults").arg(&toml).args(["--inject-imu", "0"]);
     }
     let out = cmd.output().unwrap();

@@ -13,7 +13,7 @@
 #![allow(clippy::unwrap_used, clippy::indexing_slicing)] // test code
 
 mod common;
-use common::{bin, data, tmp};
+use common::{bin, data, step_faults, tmp};
 
 /// The extract `file` with its rows in `[start, end)` cut (`cut`) or held
 /// at the first of them.
@@ -50,14 +50,15 @@ fn beyond(got: &[u64], clean: &[u64]) -> Vec<(usize, u64, u64)> {
         .collect()
 }
 
-/// Flag events per channel of every IMU, replaying `imu` with GNSS
-/// velocity `gnss` and attitude aiding `att`, 80–235 s.
-fn events(
+/// The replay's JSON summary of `imu` with GNSS velocity `gnss` and
+/// attitude aiding `att`, 80–235 s, through `monitor`, with `extra`.
+fn replay_json(
     imu: &std::path::Path,
     gnss: &std::path::Path,
     att: &std::path::Path,
     monitor: &str,
-) -> Vec<u64> {
+    extra: &[&str],
+) -> serde_json::Value {
     let out = bin()
         .arg("replay")
         .arg(imu)
@@ -74,6 +75,7 @@ fn events(
             "--monitor",
             monitor,
         ])
+        .args(extra)
         .output()
         .unwrap();
     assert!(
@@ -81,8 +83,18 @@ fn events(
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let s: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    s["channels"]
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// Flag events per channel of every IMU, replaying `imu` with GNSS
+/// velocity `gnss` and attitude aiding `att`, 80–235 s.
+fn events(
+    imu: &std::path::Path,
+    gnss: &std::path::Path,
+    att: &std::path::Path,
+    monitor: &str,
+) -> Vec<u64> {
+    replay_json(imu, gnss, att, monitor, &[])["channels"]
         .as_array()
         .unwrap()
         .iter()
@@ -174,25 +186,11 @@ fn one_bad_cell_in_28_rows_is_bridged_not_a_window_lost() {
     // monitor missed IMU1's a_x and a_z steps, found g_z's after 17.9 s
     // (4.8 s bridged) and raised an event on IMU0 fault-free.
     let imu = bad_cells();
-    let base = |extra: &[&str]| {
-        let out = bin()
-            .arg("replay")
-            .arg(&imu)
-            .arg("--gnss")
-            .arg(data("ap_log171_gps_vel_ned.csv"))
-            .arg("--att")
-            .arg(data("ap_log171_attitude_quat.csv"))
-            .args(["--from", "80", "--to", "235", "--json", "--monitor", "ukf"])
-            .args(extra)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()
-    };
+    let (gnss, att) = (
+        data("ap_log171_gps_vel_ned.csv"),
+        data("ap_log171_attitude_quat.csv"),
+    );
+    let base = |extra: &[&str]| replay_json(&imu, &gnss, &att, "ukf", extra);
     let free = base(&[]);
     assert_eq!(free["rejected_imu_rows"].as_u64(), Some(90));
     let events: Vec<u64> = free["channels"]
@@ -206,18 +204,14 @@ fn one_bad_cell_in_28_rows_is_bridged_not_a_window_lost() {
         "fault-free events {events:?}"
     );
     for (k, name) in [(0, "a_x"), (2, "a_z"), (5, "g_z")] {
-        let toml = tmp(&format!("bad-cells-step-{k}.toml"));
-        std::fs::write(
-            &toml,
-            format!(
-                "[sizes]\naccel = [0.5, 0.0, 0.0]\ngyro = [{}, 0.0, 0.0]\n\
-                 f_unit = [1.0, 0.017453292519943295]\n\
-                 [[faults]]\nchannel = {k}\nstart = 195.0\nend = 215.0\n\
-                 kind = \"E1\"\nsign = 1.0\n",
-                2.0f64.to_radians()
-            ),
-        )
-        .unwrap();
+        let toml = step_faults(
+            &format!("bad-cells-step-{k}.toml"),
+            k,
+            195.0,
+            215.0,
+            0.5,
+            2.0,
+        );
         let s = base(&["--faults", toml.to_str().unwrap(), "--inject-imu", "1"]);
         let t = s["channels"][6 + k]["first_correct_s"].as_f64();
         assert!(

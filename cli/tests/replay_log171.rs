@@ -17,7 +17,7 @@
 )] // test code
 
 mod common;
-use common::{bin, data, tmp};
+use common::{bin, data, step_faults, tmp};
 
 /// `replay` of the shipped log171 extracts, 80–235 s, with `extra`; the
 /// JSON summary.
@@ -67,18 +67,7 @@ fn steps(extra: &[&str]) -> [[bool; 6]; 3] {
     let mut found = [[false; 6]; 3];
     for (imu, row) in found.iter_mut().enumerate() {
         for (k, hit) in row.iter_mut().enumerate() {
-            let toml = tmp(&format!("step-{imu}-{k}.toml"));
-            std::fs::write(
-                &toml,
-                format!(
-                    "[sizes]\naccel = [0.5, 0.0, 0.0]\ngyro = [{}, 0.0, 0.0]\n\
-                     f_unit = [1.0, 0.017453292519943295]\n\
-                     [[faults]]\nchannel = {k}\nstart = 150.0\nend = 170.0\n\
-                     kind = \"E1\"\nsign = 1.0\n",
-                    2.0f64.to_radians()
-                ),
-            )
-            .unwrap();
+            let toml = step_faults(&format!("step-{imu}-{k}.toml"), k, 150.0, 170.0, 0.5, 2.0);
             let imu_s = imu.to_string();
             let mut args = vec!["--faults", toml.to_str().unwrap(), "--inject-imu", &imu_s];
             args.extend_from_slice(extra);
@@ -468,18 +457,7 @@ fn per_row_block_test_ratios() {
 #[test]
 fn a_bias_beyond_the_turn_on_bound_from_power_up_is_reported_at_monitoring_start() {
     for k in [0usize, 5] {
-        let toml = tmp(&format!("power-up-{k}.toml"));
-        std::fs::write(
-            &toml,
-            format!(
-                "[sizes]\naccel = [3.0, 0.0, 0.0]\ngyro = [{}, 0.0, 0.0]\n\
-                 f_unit = [1.0, 0.017453292519943295]\n\
-                 [[faults]]\nchannel = {k}\nstart = 0.0\nend = 1000.0\n\
-                 kind = \"E1\"\nsign = 1.0\n",
-                10.0f64.to_radians()
-            ),
-        )
-        .unwrap();
+        let toml = step_faults(&format!("power-up-{k}.toml"), k, 0.0, 1000.0, 3.0, 10.0);
         let faults = ["--faults", toml.to_str().unwrap(), "--inject-imu", "1"];
         for mon in ["ukf", "otsukf"] {
             let args = [&["--monitor", mon][..], &faults[..]].concat();

@@ -51,3 +51,29 @@ pub fn channel<'a>(s: &'a serde_json::Value, name: &str) -> &'a serde_json::Valu
         .find(|c| c["channel"] == name)
         .unwrap()
 }
+
+/// A fault table (`replay --faults`) with one step (`E1`, sign +1) on
+/// `channel` (0–5: a_x … g_z) over `[start, end)` s: `accel_m_s2` on an
+/// accelerometer, `gyro_deg_s` on a gyro. Written to `tmp(name)`.
+pub fn step_faults(
+    name: &str,
+    channel: usize,
+    start: f64,
+    end: f64,
+    accel_m_s2: f64,
+    gyro_deg_s: f64,
+) -> PathBuf {
+    let path = tmp(name);
+    std::fs::write(
+        &path,
+        format!(
+            "[sizes]\naccel = [{accel_m_s2:?}, 0.0, 0.0]\ngyro = [{:?}, 0.0, 0.0]\n\
+             f_unit = [1.0, 0.017453292519943295]\n\
+             [[faults]]\nchannel = {channel}\nstart = {start:?}\nend = {end:?}\n\
+             kind = \"E1\"\nsign = 1.0\n",
+            gyro_deg_s.to_radians()
+        ),
+    )
+    .unwrap();
+    path
+}
