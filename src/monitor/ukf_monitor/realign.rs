@@ -301,6 +301,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             }
         }
         self.tracker.forget_states(reset);
+        // Before `velocity_tainted` is cleared: it says a gyro went first.
+        self.regrowth_start(reset);
         if reset.iter().take(3).any(|r| *r) {
             self.velocity_tainted = false;
         }
