@@ -220,7 +220,7 @@ fn gz_50_deg_s_1_s_does_not_cascade_onto_g_y_both_monitors() {
 /// re-aligned velocity diverged again. The regression of the velocity
 /// innovations on the accelerometer signature since the re-alignment
 /// (`regrowth.rs`) flags a_x, positive, during the glitch (measured
-/// 162.5–165.1 s, raised at 4.5 m/s², largest estimate 4.7), and nothing
+/// 162.5–165.1 s, raised at 3.6 m/s², largest estimate 4.1), and nothing
 /// else.
 #[test]
 fn ukf_ax_5_m_s2_3_s_re_aligned_by_the_jump_rule_is_attributed() {

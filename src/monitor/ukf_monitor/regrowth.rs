@@ -14,35 +14,38 @@
 //! closed-loop signature of a constant fault since the re-alignment says.
 //!
 //! The re-alignment zeroes the velocity rows of the fault sensitivity
-//! `X = ∂x̂/∂f`, so from then on the signature rows `m_k = −H X⁻` of the
-//! velocity innovations (accelerometer columns) are exactly the response of
-//! innovation `k` to a constant accelerometer fault `f` that started at the
-//! re-alignment (the filter's gain included: it pulls part of the error
-//! back, which the signature knows). The test is the weighted least
-//! squares of the fused velocity innovations on those rows, weights
-//! `1/(c S_kk)` with `c` the learnt inflation:
+//! `X = ∂x̂/∂f`, so from then on the accelerometer columns of the
+//! signature rows `m_k = −H X⁻` are the response of innovation `k` to a
+//! constant accelerometer fault that started at the re-alignment (the
+//! filter's gain included: it pulls part of the error back, which the
+//! signature knows). The test is the generalised likelihood ratio of a
+//! single fault on channel `j` (the window test's isolation rule) over the
+//! fused innovations since the re-alignment, weights `w = 1/(c S_kk)` with
+//! `c` the learnt inflation:
 //!
-//! `f̂ = A⁻¹ b`, `A = Σ mᵀ w m`, `b = Σ mᵀ w ν`, `var f̂_j = (A⁻¹)_jj`.
+//! `f̂_j = b_j / A_j`, `z_j = b_j / √A_j`, `A_j = Σ w m_kj²`,
+//! `b_j = Σ w m_kj ν_k`.
 //!
-//! With healthy accelerometers `f̂_j/√(A⁻¹)_jj` is standard normal, so the
-//! per-channel decision `|z_j| > ` the UKF test's own critical value (the
-//! normal quantile of `alpha`) has that test's false-alarm rate per
-//! decision; no margin is set by hand. A channel is flagged with the sign
-//! and the size of `f̂_j` (the regression slope) when it is also at least
-//! the smallest fault reported (`min_fault × threshold_fraction`, as the
-//! block tests). The test runs until the UKF's window test judges the
-//! accelerometers again, which then holds or drops the flag; meanwhile the
-//! accelerometer/GNSS-velocity block test integrates (its increments do
-//! not depend on the re-aligned state), so a flag whose fault has ended is
-//! found ended by its newest window and the velocity re-aligned again
-//! (`realign_ended`): the way back to nominal.
-
-use nalgebra::{Matrix3, Vector3};
+//! With a healthy IMU `z_j` is standard normal, so the decision
+//! `|z_j| > ` the UKF test's own critical value (the normal quantile of
+//! `alpha`) has that test's false-alarm rate per decision; no margin is set
+//! by hand. The likeliest channel is flagged with the sign and the size
+//! of `f̂_j` (the regression slope) when it is an accelerometer (a gyro
+//! whose attitude error leaks gravity into the velocity is the likeliest
+//! on the attitude rows) and at least the smallest fault reported
+//! (`min_fault × threshold_fraction`, as the block tests). The test runs
+//! until the UKF's window test judges the accelerometers again, which then
+//! holds or drops the flag; meanwhile the accelerometer/GNSS-velocity
+//! block test integrates (its increments do not depend on the re-aligned
+//! state), and a flag its newest window contradicts is withdrawn (the
+//! fault has ended; the regression, over everything since the
+//! re-alignment, still holds the ramp it left), or found ended by
+//! `realign_ended` once the window test holds it: the way back to nominal.
 
 use super::UkfMonitor;
 use crate::filter::ChannelDiag;
 use crate::math::Real;
-use crate::model::{Mat6, NX, NZ, ROLL};
+use crate::model::{ImuVec, Mat6, NX, NZ, ROLL};
 use crate::monitor::{ChannelState, Phase};
 
 /// The regression since the last velocity-alone re-alignment.
@@ -51,10 +54,11 @@ pub(super) struct Regrowth<T> {
     /// An episode is open: the velocity was re-aligned alone and the
     /// window test does not judge the accelerometers yet.
     active: bool,
-    /// `Σ mᵀ w m` over the accelerometer columns.
-    info: Matrix3<T>,
-    /// `Σ mᵀ w ν`.
-    score: Vector3<T>,
+    /// `Σ w m_j²` per IMU channel `j` (the diagonal of `A`: each channel
+    /// a single-fault hypothesis).
+    info: ImuVec<T>,
+    /// `Σ w m_j ν`.
+    score: ImuVec<T>,
     /// A gyro fault was in play in this episode (until every channel is
     /// judged healthy again): kept across re-alignments.
     gyro_seen: bool,
@@ -64,27 +68,37 @@ impl<T: Real> Default for Regrowth<T> {
     fn default() -> Self {
         Self {
             active: false,
-            info: Matrix3::zeros(),
-            score: Vector3::zeros(),
+            info: ImuVec::zeros(),
+            score: ImuVec::zeros(),
             gyro_seen: false,
         }
     }
 }
 
 impl<T: Real> Regrowth<T> {
-    /// Adds one epoch's fused velocity innovations: `signature` rows 0..3
-    /// (accelerometer columns 0..3), `diag` their innovations and `S_kk`,
-    /// `inflation` the learnt factor per channel.
+    /// Adds one epoch's fused innovations: `signature` the rows of every
+    /// aiding channel (columns: the six IMU channels), `diag` their
+    /// innovations and `S_kk`, `inflation` the learnt factor per channel.
+    /// The attitude rows too: a gyro fault shows there, and its hypothesis
+    /// must be able to win (its attitude error leaks gravity into the
+    /// velocity, which the accelerometer columns alone would take).
     fn observe(&mut self, signature: &Mat6<T>, diag: &[ChannelDiag<T>; NZ], inflation: &[T; NZ]) {
-        for (k, (d, c)) in diag.iter().zip(inflation.iter()).take(3).enumerate() {
+        for (k, (d, c)) in diag.iter().zip(inflation.iter()).enumerate() {
             let var = d.variance * *c;
             if !(d.available && d.fused && var > T::zero() && d.innovation.finite()) {
                 continue;
             }
             let w = T::one() / var;
-            let m = Vector3::from_fn(|j, _| signature.get((k, j)).copied().unwrap_or_else(T::zero));
-            self.info += m * m.transpose() * w;
-            self.score += m * (d.innovation * w);
+            let row = signature.row(k);
+            for ((a, b), m) in self
+                .info
+                .iter_mut()
+                .zip(self.score.iter_mut())
+                .zip(row.iter())
+            {
+                *a += *m * *m * w;
+                *b += *m * d.innovation * w;
+            }
         }
     }
 
@@ -95,7 +109,7 @@ impl<T: Real> Regrowth<T> {
     fn most_likely(&self) -> Option<(usize, T, T)> {
         let mut best: Option<(usize, T, T)> = None;
         for (j, b) in self.score.iter().enumerate() {
-            let a = self.info.get((j, j)).copied().unwrap_or_else(T::zero);
+            let a = self.info.get(j).copied().unwrap_or_else(T::zero);
             if a <= T::zero() || !a.finite() {
                 continue;
             }
@@ -187,7 +201,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // filter, contradicting this size: the fault has ended (the
         // regression, over everything since the re-alignment, still holds
         // the ramp the fault left).
-        if z.abs() <= self.t_threshold() || f.abs() < smallest || self.vel_inc_contradicts(j, f) {
+        // A gyro the likeliest: its attitude error, not an accelerometer,
+        // drives the velocity; that is the gyro tests' to judge.
+        if j >= 3
+            || z.abs() <= self.t_threshold()
+            || f.abs() < smallest
+            || self.vel_inc_contradicts(j, f)
+        {
             return;
         }
         let (Some(s), Some(e)) = (
