@@ -123,16 +123,26 @@ impl<T: Real> Regrowth<T> {
 }
 
 impl<T: Real, const W: usize> UkfMonitor<T, W> {
-    /// A re-alignment of the `reset` states: a velocity re-aligned alone
-    /// while monitoring opens an episode (anything else closes one: the
-    /// attitude re-aligned too is not the accelerometers' case). Not while
-    /// a gyro fault is in play (`gyro_in_play`).
-    pub(super) fn regrowth_start(&mut self, reset: &[bool; NX]) {
+    /// The jump rule's re-alignment of the `reset` states opens an
+    /// episode: the velocity re-aligned alone while monitoring, no gyro
+    /// fault in play (`gyro_in_play`; asked before the re-alignment clears
+    /// `velocity_tainted`). The attitude re-aligned too is not the
+    /// accelerometers' case.
+    pub(super) fn regrowth_opens(&self, reset: &[bool; NX]) -> bool {
         let vel = reset.iter().take(3).any(|r| *r);
         let att = reset.iter().skip(ROLL).any(|r| *r);
-        let open = vel && !att && self.phase == Phase::Monitoring && !self.gyro_in_play();
+        vel && !att && self.phase == Phase::Monitoring && !self.gyro_in_play()
+    }
+
+    /// Opens an episode (`open`, from `regrowth_opens`) on the statistics
+    /// the re-alignment just restarted.
+    pub(super) fn regrowth_open(&mut self, open: bool) {
+        self.regrowth.active = open;
+    }
+
+    /// Closes any episode (every re-alignment restarts the regression).
+    pub(super) fn regrowth_close(&mut self) {
         self.regrowth = Regrowth {
-            active: open,
             gyro_seen: self.regrowth.gyro_seen,
             ..Regrowth::default()
         };

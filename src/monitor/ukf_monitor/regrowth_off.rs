@@ -9,7 +9,13 @@ use crate::model::NX;
 
 impl<T: Real, const W: usize> UkfMonitor<T, W> {
     #[inline(always)]
-    pub(super) fn regrowth_start(&mut self, _reset: &[bool; NX]) {}
+    pub(super) fn regrowth_opens(&self, _reset: &[bool; NX]) -> bool {
+        false
+    }
+    #[inline(always)]
+    pub(super) fn regrowth_open(&mut self, _open: bool) {}
+    #[inline(always)]
+    pub(super) fn regrowth_close(&mut self) {}
     #[inline(always)]
     pub(super) fn regrowth_apply(&mut self) {}
 }
