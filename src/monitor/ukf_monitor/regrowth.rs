@@ -48,6 +48,12 @@ use crate::math::Real;
 use crate::model::{ImuVec, Mat6, NX, NZ, ROLL};
 use crate::monitor::{ChannelState, Phase};
 
+/// Margin (χ² units: twice the log-likelihood ratio) by which the
+/// likeliest channel must beat the runner-up to be named: the upper 10⁻³
+/// quantile of χ²(1), the parity monitor's isolation margin
+/// (`MultiscaleConfig::isolation_margin`) for the same question.
+const ISOLATION_MARGIN: f64 = 10.8;
+
 /// The regression since the last velocity-alone re-alignment.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Regrowth<T> {
@@ -105,20 +111,28 @@ impl<T: Real> Regrowth<T> {
     /// The single-fault hypothesis that explains the most (generalised
     /// likelihood ratio, as the window test's decision rule isolates):
     /// channel `j` maximising `b_j² / A_jj`, its estimate `b_j / A_jj` and
-    /// z score `b_j / √A_jj` (`None` before any row carries a signature).
-    fn most_likely(&self) -> Option<(usize, T, T)> {
+    /// z score `b_j / √A_jj` (`None` before any row carries a signature),
+    /// with its margin over the runner-up hypothesis, `z_j² − z_i²` (twice
+    /// the log-likelihood ratio of the two; zero with a single hypothesis).
+    fn ranked(&self) -> Option<((usize, T, T), T)> {
         let mut best: Option<(usize, T, T)> = None;
+        let mut second = T::zero();
         for (j, b) in self.score.iter().enumerate() {
             let a = self.info.get(j).copied().unwrap_or_else(T::zero);
             if a <= T::zero() || !a.finite() {
                 continue;
             }
             let z = *b / a.sqrt_fast();
-            if best.is_none_or(|(_, _, zb)| z.abs() > zb.abs()) {
-                best = Some((j, *b / a, z));
+            match best {
+                Some((_, _, zb)) if z.abs() <= zb.abs() => second = second.fmax(z * z),
+                Some((_, _, zb)) => {
+                    second = second.fmax(zb * zb);
+                    best = Some((j, *b / a, z));
+                }
+                None => best = Some((j, *b / a, z)),
             }
         }
-        best
+        best.map(|b| (b, b.2 * b.2 - second))
     }
 }
 
@@ -202,7 +216,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         }
         self.regrowth
             .observe(&self.signature, &self.report.detail.diag, &self.inflation);
-        let Some((j, f, z)) = self.regrowth.most_likely() else {
+        let Some(((j, f, z), margin)) = self.regrowth.ranked() else {
             return;
         };
         let relevant = self.cfg.min_fault * self.cfg.threshold_fraction;
@@ -213,8 +227,14 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // the ramp the fault left).
         // A gyro the likeliest: its attitude error, not an accelerometer,
         // drives the velocity; that is the gyro tests' to judge.
+        // Two hypotheses that explain the regrowth almost equally well (a
+        // −5 m/s² a_x glitch in a pitched turn on log171 was a_z's first by
+        // a hair, and IMU1's only a_z's) are not told apart: the channels
+        // stay `NotMonitored`, the monitor's "cannot judge", rather than
+        // name one that may be healthy.
         if j >= 3
             || z.abs() <= self.t_threshold()
+            || margin < T::lit(ISOLATION_MARGIN)
             || f.abs() < smallest
             || self.vel_inc_contradicts(j, f)
         {
@@ -272,7 +292,7 @@ mod tests {
             });
             r.observe(&sig, &diag, &[1.0; NZ]);
         }
-        r.most_likely()
+        r.ranked().map(|(best, _)| best)
     }
 
     #[test]
@@ -291,9 +311,62 @@ mod tests {
         assert!(z.abs() < 3.0, "{z}");
     }
 
+    /// Two channels whose signatures are the same direction (a_x and
+    /// a_z both seen on the first velocity row alone): the fault explains
+    /// both equally, the margin is zero and falls short of
+    /// `ISOLATION_MARGIN`; a ramp on one channel of distinct signatures
+    /// beats the others by far more than it.
+    #[test]
+    fn the_margin_is_the_likelihood_ratio_over_the_runner_up() {
+        let mut r = Regrowth::<f64>::default();
+        for k in 1..=9 {
+            let t = 0.2 * f64::from(k);
+            let sig = Mat6::from_fn(|i, j| {
+                if i == 0 && (j == 0 || j == 2) {
+                    -t
+                } else {
+                    0.0
+                }
+            });
+            let diag = core::array::from_fn(|i| ChannelDiag {
+                available: i < 3,
+                innovation: if i == 0 { 2.0 * t } else { 0.0 },
+                variance: 0.09,
+                test_ratio: 0.0,
+                fused: i < 3,
+            });
+            r.observe(&sig, &diag, &[1.0; NZ]);
+        }
+        let ((_, _, z), margin) = r.ranked().unwrap();
+        assert!(z.abs() > 10.0, "{z}");
+        assert!(margin.abs() < 1e-9, "{margin}");
+        let mut one = Regrowth::<f64>::default();
+        for (k, n) in NOISE.iter().enumerate() {
+            let t = 0.2 * (k + 1) as f64;
+            let sig = Mat6::from_fn(|i, j| if i == j && i < 3 { -t } else { 0.0 });
+            let diag = core::array::from_fn(|i| ChannelDiag {
+                available: i < 3,
+                innovation: if i == 1 {
+                    2.0 * t + n[i]
+                } else if i < 3 {
+                    n[i]
+                } else {
+                    0.0
+                },
+                variance: 0.09,
+                test_ratio: 0.0,
+                fused: i < 3,
+            });
+            one.observe(&sig, &diag, &[1.0; NZ]);
+        }
+        let ((j, _, _), margin) = one.ranked().unwrap();
+        assert_eq!(j, 1);
+        assert!(margin > 10.0 * ISOLATION_MARGIN, "{margin}");
+    }
+
     /// No fused velocity row yet: no decision.
     #[test]
     fn no_rows_no_estimate() {
-        assert!(Regrowth::<f32>::default().most_likely().is_none());
+        assert!(Regrowth::<f32>::default().ranked().is_none());
     }
 }
