@@ -79,6 +79,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
                 let tainted = self.velocity_tainted();
                 let gyro_fault = self.att_rate_sees_fault();
                 self.vel_inc_apply(tainted, gyro_fault);
+                self.regrowth_apply();
                 let f = if self.power_up.any() && !held {
                     instant(self)
                 } else {

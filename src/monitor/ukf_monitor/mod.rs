@@ -38,6 +38,10 @@ mod power_up;
 #[path = "power_up_off.rs"]
 mod power_up;
 mod realign;
+#[cfg(feature = "velocity-increment-test")]
+mod regrowth;
+#[cfg(not(feature = "velocity-increment-test"))]
+mod regrowth_off;
 mod velocity_delay;
 #[cfg(feature = "velocity-increment-test")]
 mod velocity_increment;
@@ -168,6 +172,10 @@ pub struct UkfMonitor<T, const W: usize = DEFAULT_WINDOW> {
     /// (`velocity_increment/`).
     #[cfg(feature = "velocity-increment-test")]
     vel_inc: crate::monitor::block_test::velocity_increment::VelocityIncrement<T>,
+    /// The regression of the velocity innovations after a velocity-alone
+    /// re-alignment (`regrowth.rs`).
+    #[cfg(feature = "velocity-increment-test")]
+    regrowth: regrowth::Regrowth<T>,
     history: heapless::HistoryBuf<StateVec<T>, { MAX_DELAY_STEPS + 1 }>,
     report: UkfReport<T>,
 }
@@ -262,6 +270,8 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             vel_inc: crate::monitor::block_test::velocity_increment::VelocityIncrement::for_config(
                 &cfg,
             ),
+            #[cfg(feature = "velocity-increment-test")]
+            regrowth: regrowth::Regrowth::default(),
             history: heapless::HistoryBuf::new(),
             report: UkfReport::default(),
             cfg,

@@ -122,7 +122,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // taints the velocity (`velocity_tainted`).
         self.velocity_jumped =
             reset.iter().take(3).any(|r| *r) && !reset.iter().skip(ROLL).any(|r| *r);
+        // Judged before the re-alignment clears `velocity_tainted`.
+        let regrow = self.regrowth_opens(&reset);
         self.apply_realignment(x, &reset);
+        self.regrowth_open(regrow);
         (out, true)
     }
 
@@ -301,6 +304,10 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             }
         }
         self.tracker.forget_states(reset);
+        // Any re-alignment closes a regrowth episode; only the jump rule's
+        // opens one (`realign_outliers`): after the ended-fault rule's the
+        // fault was just found over.
+        self.regrowth_close();
         if reset.iter().take(3).any(|r| *r) {
             self.velocity_tainted = false;
         }

@@ -18,8 +18,13 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
     }
 
     /// Learning or monitoring, statistics not held: the test integrates.
+    /// Also through the hold-off of a velocity-alone re-alignment
+    /// (`regrowth.rs`): its increments compare the IMU with the aiding, not
+    /// with the re-aligned state, and it is what finds a flagged fault
+    /// ended there.
     fn vel_inc_live(&self) -> bool {
-        matches!(self.phase, Phase::Learning | Phase::Monitoring) && self.stats_holdoff <= T::zero()
+        matches!(self.phase, Phase::Learning | Phase::Monitoring)
+            && (self.stats_holdoff <= T::zero() || self.regrowth_live())
     }
 
     /// What the accelerometer/GNSS-velocity consistency test shows (`None`
@@ -210,6 +215,12 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
             let f = f.map(|f| flag_reference(f, raised_at.get(c).copied()));
             flagged && f.is_some_and(|f| self.vel_inc.test.contradicts(c, f))
         })
+    }
+
+    /// The test's newest shortest window contradicts a fault of size `f` on
+    /// accelerometer `c` (`BlockTest::contradicts`); false when off.
+    pub(in crate::monitor::ukf_monitor) fn vel_inc_contradicts(&self, c: usize, f: T) -> bool {
+        self.vel_inc_on() && self.vel_inc.test.contradicts(c, f)
     }
 
     /// Forgets the intervals and windows (re-alignment).
