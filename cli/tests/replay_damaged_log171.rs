@@ -180,7 +180,7 @@ fn bad_cells() -> std::path::PathBuf {
 fn one_bad_cell_in_28_rows_is_bridged_not_a_window_lost() {
     // A sample with a bad cell is bridged channel by channel (the cell
     // from the last good sample) in the filter and the block tests, the
-    // statistics running on (`input::stand_in`, `ImuGap::bridgeable`).
+    // statistics running on (`input::stand_in`, `ImuGap::bridges`).
     // Before, every bad sample held the statistics for 0.5 s and dropped
     // the block tests' interval, ring and open block: on this copy the UKF
     // monitor missed IMU1's a_x and a_z steps, found g_z's after 17.9 s

@@ -17,11 +17,16 @@ const SATURATION_FRACTION: f64 = 0.98;
 /// A period longer than this many nominal periods is a gap.
 const MAX_PERIOD_FACTOR: f64 = 5.0;
 
+/// One channel's reading is finite and within 1.5× its full scale.
+fn channel_in_range<T: Real>(v: T, full_scale: T) -> bool {
+    v.finite() && v.abs() <= full_scale * T::lit(RANGE_FACTOR)
+}
+
 /// True when every channel is finite and within 1.5× its full scale.
 pub(crate) fn in_range<T: Real>(imu: &ImuVec<T>, full_scale: &ImuVec<T>) -> bool {
     imu.iter()
         .zip(full_scale.iter())
-        .all(|(v, fs)| v.finite() && v.abs() <= *fs * T::lit(RANGE_FACTOR))
+        .all(|(v, fs)| channel_in_range(*v, *fs))
 }
 
 /// The sample that stands in for an unusable one: each channel that is
@@ -35,7 +40,7 @@ pub(crate) fn stand_in<T: Real>(
 ) -> ImuVec<T> {
     let mut out = *last;
     for ((o, v), fs) in out.iter_mut().zip(imu.iter()).zip(full_scale.iter()) {
-        if v.finite() && v.abs() <= *fs * T::lit(RANGE_FACTOR) {
+        if channel_in_range(*v, *fs) {
             *o = *v;
         }
     }
@@ -115,12 +120,16 @@ impl<T: Real> ImuGap<T> {
         gap
     }
 
-    /// The run of unusable samples under way (if any) is still short
-    /// enough to bridge with the last good sample: at most five nominal
-    /// `period`s missed, beyond which [`back_after_gap`](Self::back_after_gap)
-    /// reports a gap when the IMU is back.
-    pub(crate) fn bridgeable(&self, period: T) -> bool {
-        self.missed <= period * T::lit(MAX_PERIOD_FACTOR)
+    /// This sample is unusable (`usable` false) and the run of unusable
+    /// samples it belongs to is still short enough to bridge with a stand-in
+    /// everywhere: at most five nominal `period`s missed, beyond which
+    /// [`back_after_gap`](Self::back_after_gap) reports a gap when the IMU
+    /// is back. Always false without the gap recovery (feature
+    /// `imu-gap-recovery`), which is what ends a longer run.
+    pub(crate) fn bridges(&self, usable: bool, period: T) -> bool {
+        !usable
+            && cfg!(feature = "imu-gap-recovery")
+            && self.missed <= period * T::lit(MAX_PERIOD_FACTOR)
     }
 }
 

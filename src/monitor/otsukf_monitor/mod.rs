@@ -212,8 +212,7 @@ impl<T: Real> OtsukfMonitor<T> {
         // A short run of unusable samples is bridged with a stand-in, the
         // statistics running on (the innovation monitor's reasons: `step`
         // there); a longer one holds them.
-        let bridge =
-            !usable && cfg!(feature = "imu-gap-recovery") && self.imu_gap.bridgeable(b.imu_period);
+        let bridge = self.imu_gap.bridges(usable, b.imu_period);
         if (!usable && !bridge) || health.saturated {
             self.holdoff = self.holdoff.max(T::lit(INPUT_HOLDOFF_S));
         }

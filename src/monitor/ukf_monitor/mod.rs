@@ -469,9 +469,7 @@ impl<T: Real, const W: usize> UkfMonitor<T, W> {
         // the filter dead-reckons on the last good sample (its innovations
         // say nothing about the IMU until it has settled), and the gap
         // recovery clears the windows when the IMU is back.
-        let bridge = !usable
-            && cfg!(feature = "imu-gap-recovery")
-            && self.imu_gap.bridgeable(self.cfg.imu_period);
+        let bridge = self.imu_gap.bridges(usable, self.cfg.imu_period);
         if !usable && !bridge {
             self.stats_holdoff = T::lit(0.5);
         }
